@@ -1,0 +1,108 @@
+"""The generator's command line: Hydra overrides (`key=value`) over a typed config.
+
+Every problem with the input becomes a `UserError` whose message is one line naming it; the
+CLI prints that line and exits non-zero before anything is written.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+from hydra import compose, initialize
+from hydra.core.config_store import ConfigStore
+from hydra.errors import HydraException, OverrideParseException
+from omegaconf import OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from gen.video import CODECS
+from oracle.world import MAX_IMAGE_SIZE, PHYSICS_DT
+
+
+class UserError(Exception):
+    """Bad input: the message is shown to the user as is."""
+
+
+@dataclass
+class GenConfig:
+    referent: str = "object"  # a referent type (referents/<type>.yaml)
+    n: int = 20  # episodes
+    seed: int = 0
+    out: Optional[str] = None  # output folder; default datasets/<referent>
+    overwrite: bool = False  # replace a non-empty `out`
+    image_size: int = 128  # square camera frames, pixels
+    fps: int = 20  # control and recording rate
+    codec: str = "h264"  # h264 | av1
+    max_attempts: int = 10  # oracle attempts per episode before generation stops
+    spec: Optional[str] = None  # a referent spec file instead of referents/<referent>.yaml
+    objects_per_scene: Optional[int] = None  # override the referent spec's objects_per_scene
+
+
+ConfigStore.instance().store(name="gen", node=GenConfig)
+
+
+def parse(argv: list[str]) -> GenConfig:
+    """Overrides -> validated config."""
+    try:
+        with initialize(version_base=None, config_path=None):
+            cfg = compose(config_name="gen", overrides=argv)
+    except (HydraException, OmegaConfBaseException, ValueError) as exc:
+        raise UserError(_one_line(exc)) from None
+    config: GenConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
+    validate(config)
+    return config
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    if isinstance(exc, OverrideParseException):
+        return f"cannot parse the option {exc.override!r}: write options as key=value"
+    if "Could not override" in text or "not in struct" in text or "not in 'GenConfig'" in text:
+        key = text.split("'")[1] if "'" in text else text
+        return f"unknown option {key!r}; options: {', '.join(GenConfig.__dataclass_fields__)}"
+    cause = exc.__cause__ or exc.__context__
+    inner = cause if isinstance(cause, OmegaConfBaseException) else exc
+    key = getattr(inner, "full_key", None)
+    message = str(inner).strip().splitlines()[0] if str(inner).strip() else text.splitlines()[0]
+    return f"{key}: {message}" if key else message
+
+
+def validate(cfg: GenConfig) -> None:
+    if cfg.n <= 0:
+        raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
+    if not 16 <= cfg.image_size <= MAX_IMAGE_SIZE or cfg.image_size % 2:
+        raise UserError(f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}], got {cfg.image_size}")
+    physics_hz = round(1 / PHYSICS_DT)
+    if cfg.fps <= 0 or physics_hz % cfg.fps:
+        raise UserError(f"fps must divide the physics rate of {physics_hz} Hz (e.g. 10, 20, 25, 50), got {cfg.fps}")
+    if cfg.codec not in CODECS:
+        raise UserError(f"codec must be one of {', '.join(CODECS)}, got {cfg.codec!r}")
+    if cfg.max_attempts < 1:
+        raise UserError(f"max_attempts must be at least 1, got {cfg.max_attempts}")
+    if cfg.objects_per_scene is not None and cfg.objects_per_scene < 1:
+        raise UserError(f"objects_per_scene must be at least 1, got {cfg.objects_per_scene}")
+    if cfg.out is None:
+        cfg.out = str(Path("datasets") / cfg.referent)
+    check_output(Path(cfg.out), cfg.overwrite)
+
+
+def check_output(out: Path, overwrite: bool) -> None:
+    """`out` must be creatable and writable, and empty unless `overwrite`.
+
+    Writability is tested by creating (and removing) a folder where the dataset will be staged:
+    permission bits alone say nothing for root or on read-only mounts.
+    """
+    if out.exists() and not out.is_dir():
+        raise UserError(f"out={out} exists and is not a folder")
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
+    parent = out.resolve().parent
+    while not parent.exists():
+        parent = parent.parent
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".deconfound-write-test-", dir=parent))
+    except OSError as exc:
+        raise UserError(f"out={out} is not writable ({exc.strerror or exc} in {parent})") from None

@@ -1,0 +1,54 @@
+"""Planning: a referent and a seed -> balanced, realised episode specs.
+
+Pure data: no simulator runs here, so a 10,000-episode plan takes seconds. Designs (the roles:
+which objects, where, which is the target) are drawn in sequence by one balancer; poses are
+realised per episode from (seed, index, attempt), so re-realising a failed demo changes its
+poses but never its roles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gen.spec import EpisodeSpec, SceneObject, SimSettings
+from oracle import catalog
+from oracle.world import TABLE_TOP_Z
+from referents import Referent
+from referents.base import Balance, Design
+
+
+def designs(referent: Referent, n: int, seed: int) -> list[Design]:
+    balance = Balance(np.random.default_rng(seed))
+    return [referent.design(balance) for _ in range(n)]
+
+
+def realize(referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0) -> EpisodeSpec:
+    layout = referent.config.layout
+    rng = np.random.default_rng([seed, index, attempt])
+    objects = []
+    for p in design.placements:
+        kind = catalog.kind(p.candidate.kind)
+        x, y = np.asarray(layout.slots[p.slot]) + rng.uniform(-layout.jitter, layout.jitter, 2)
+        yaw = rng.uniform(*layout.yaw)
+        pos = (round(float(x), 5), round(float(y), 5), round(kind.rest_z(TABLE_TOP_Z), 5))
+        objects.append(
+            SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, pos, round(float(yaw), 5), dict(p.candidate.attributes))
+        )
+    return EpisodeSpec(
+        referent=referent.name,
+        index=index,
+        seed=seed,
+        objects=tuple(objects),
+        target=design.target,
+        instruction=design.instruction,
+        template=design.template,
+        counterfactuals=design.counterfactuals,
+        assets=referent.config.assets(),
+        task=referent.config.task,
+        sim=sim,
+        attempt=attempt,
+    )
+
+
+def plan(referent: Referent, n: int, seed: int, sim: SimSettings) -> list[EpisodeSpec]:
+    return [realize(referent, d, i, seed, sim) for i, d in enumerate(designs(referent, n, seed))]

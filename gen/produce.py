@@ -1,0 +1,90 @@
+"""One episode from design to writer input, in whichever process runs it.
+
+Demonstrate without cameras, re-realising the poses (same roles) until the oracle's demo
+succeeds or the attempts run out; then replay the verified actions with cameras on, encode
+each camera's frames, and hand the result to the writer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gen.lerobot_writer import Episode
+from gen.plan import realize
+from gen.spec import EpisodeSpec, SimSettings
+from gen.stats import image_histogram
+from gen.video import encode_episode
+from oracle.episode import Demo, demonstrate, replay
+from oracle.ik import ArmIK
+from oracle.render import Cameras
+from oracle.scene import Scene, scene_for
+from oracle.success import Outcome, succeeded
+from referents import Referent
+from referents.base import Design
+
+
+@dataclass
+class Produced:
+    spec: EpisodeSpec  # the realisation whose demo succeeded
+    failures: list[str]  # why earlier attempts failed, in order
+    episode: Episode
+    initial_state: np.ndarray
+    outcome: Outcome
+
+
+class DemoFailed(RuntimeError):
+    """Every attempt at an episode failed: the spec is unworkable (the message says why)."""
+
+
+class Producer:
+    """What a process keeps across episodes: compiled scene, IK and renderer."""
+
+    def __init__(self, referent: Referent, sim: SimSettings, codec: str = "h264") -> None:
+        self.referent = referent
+        self.sim = sim
+        self.codec = codec
+        self.scene: Scene = scene_for(referent.config.assets())
+        self.ik = ArmIK(np.asarray(sim.robot_home))
+        self.cameras = Cameras(self.scene, sim.image_size, sim.cameras)
+
+    def demonstrate(self, design: Design, index: int, seed: int, max_attempts: int) -> tuple[Demo, list[str]]:
+        failures: list[str] = []
+        for attempt in range(max_attempts):
+            spec = realize(self.referent, design, index, seed, self.sim, attempt)
+            demo = demonstrate(self.scene, self.ik, spec, self.referent.demo)
+            if demo.success:
+                return demo, failures
+            failures.append(demo.failure)
+        raise DemoFailed(f"episode {index}: all {max_attempts} oracle attempts failed ({'; '.join(failures)})")
+
+    def produce(self, design: Design, index: int, seed: int, max_attempts: int) -> Produced:
+        demo, failures = self.demonstrate(design, index, seed, max_attempts)
+        return self.record(demo, failures)
+
+    def record(self, demo: Demo, failures: list[str]) -> Produced:
+        """Replay a verified demo with cameras on."""
+        spec, actions = demo.spec, demo.actions
+        frames = {c: np.empty((len(actions), self.sim.image_size, self.sim.image_size, 3), np.uint8) for c in self.sim.cameras}
+        states = np.empty((len(actions), len(self.scene.state())), np.float32)
+        initial_state: list[np.ndarray] = []
+
+        def observe(t: int) -> None:
+            if t == 0:
+                initial_state.append(self.scene.physics_state())
+            states[t] = self.scene.state()
+            for cam, image in self.cameras.render().items():
+                frames[cam][t] = image
+
+        outcome = replay(self.scene, spec, actions, observe)
+        if not succeeded(spec, outcome):
+            raise RuntimeError(f"episode {spec.index}: replay of a verified demo did not succeed (non-deterministic physics?)")
+        episode = Episode(
+            task=spec.instruction,
+            states=states,
+            actions=actions,
+            videos={c: encode_episode(f, self.sim.fps, self.codec) for c, f in frames.items()},
+            histograms={c: image_histogram(f) for c, f in frames.items()},
+        )
+        return Produced(spec, failures, episode, initial_state[0], outcome)

@@ -1,0 +1,55 @@
+"""meta/scenes.parquet: one row per episode with everything needed to rebuild its scene.
+
+Columns: episode_index (int), referent, instruction, target (an object id), scene (JSON
+`{"objects": [{"id", "kind", "name", "slot", "pos", "yaw", "attributes"}]}`), counterfactuals
+(JSON list of `{"instruction", "target", "changed"}`), spec (the full episode spec as JSON),
+spec_hash, scene_hash, failed_attempts (oracle attempts before the recorded one),
+initial_state (MuJoCo mjSTATE_INTEGRATION vector at frame 0) and outcome (JSON: each object's
+rise and horizontal displacement, the final end-effector position).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from gen.produce import Produced
+from gen.spec import EpisodeSpec
+
+SCENES_PATH = "meta/scenes.parquet"
+
+
+def row(episode_index: int, produced: Produced) -> dict:
+    spec = produced.spec
+    return {
+        "episode_index": episode_index,
+        "referent": spec.referent,
+        "instruction": spec.instruction,
+        "target": spec.target,
+        "scene": json.dumps(spec.scene_record()),
+        "counterfactuals": json.dumps([asdict(c) for c in spec.counterfactuals]),
+        "spec": spec.to_json(),
+        "spec_hash": spec.hash,
+        "scene_hash": spec.scene_hash,
+        "failed_attempts": len(produced.failures),
+        "initial_state": produced.initial_state.astype(np.float64).tolist(),
+        "outcome": json.dumps(asdict(produced.outcome)),
+    }
+
+
+def write(root: Path, rows: list[dict]) -> None:
+    pq.write_table(pa.Table.from_pylist(rows), root / SCENES_PATH)
+
+
+def read(root: Path) -> pd.DataFrame:
+    return pd.read_parquet(root / SCENES_PATH)
+
+
+def specs(root: Path) -> list[EpisodeSpec]:
+    return [EpisodeSpec.from_json(s) for s in read(root)["spec"]]

@@ -1,0 +1,182 @@
+"""The episode spec: the one currency of the project.
+
+Referents produce specs, the oracle consumes them, the writer records them and the exam and
+battery replay them. A spec is plain, immutable data that round-trips through JSON, carries a
+version, and hashes the same wherever it is computed, so that a scene can be rebuilt and
+recognised from the spec alone.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+SPEC_VERSION = 1
+
+# The robot's joint-space home pose (robosuite's Panda init_qpos): every episode starts here.
+PANDA_HOME: tuple[float, ...] = (0.0, 0.19634954, 0.0, -2.61799388, 0.0, 2.94159265, 0.78539816)
+
+
+class SpecError(ValueError):
+    """A spec (or its JSON) is malformed or of an unsupported version."""
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """One object on the table.
+
+    `id` is unique within the scene, `kind` is the catalog entry that builds it, `name` is the
+    noun instructions use for it, and `pos` is the world position of its body origin while it
+    rests on the table.
+    """
+
+    id: str
+    kind: str
+    name: str
+    slot: int
+    pos: tuple[float, float, float]
+    yaw: float = 0.0
+    attributes: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Counterfactual:
+    """The instruction with one word changed, and the object (or program) it then names."""
+
+    instruction: str
+    target: str
+    changed: tuple[str, str]
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """What the oracle must do and how success is judged (see oracle/success.py)."""
+
+    program: str = "pick"
+    lift_margin: float = 0.05
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """Everything besides the objects that determines the simulation and its recording."""
+
+    image_size: int = 128
+    fps: int = 20
+    cameras: tuple[str, ...] = ("agentview", "wrist")
+    robot_home: tuple[float, ...] = PANDA_HOME
+
+
+@dataclass(frozen=True)
+class EpisodeSpec:
+    """A complete, replayable description of one episode.
+
+    `assets` is the model's inventory (catalog kind -> number of bodies): objects not in the
+    scene are parked out of view, so every episode of a dataset shares one compiled model.
+    `attempt` counts oracle failures: a failed demo is re-realised with new pose noise but the
+    same roles, so resampling never changes the role balance.
+    """
+
+    referent: str
+    index: int
+    seed: int
+    objects: tuple[SceneObject, ...]
+    target: str
+    instruction: str
+    template: str
+    counterfactuals: tuple[Counterfactual, ...]
+    assets: tuple[tuple[str, int], ...]
+    task: TaskSpec = TaskSpec()
+    sim: SimSettings = SimSettings()
+    attempt: int = 0
+    version: int = SPEC_VERSION
+
+    def object(self, object_id: str) -> SceneObject:
+        for obj in self.objects:
+            if obj.id == object_id:
+                return obj
+        raise KeyError(f"no object {object_id!r} in episode {self.index}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def to_json(self) -> str:
+        """Canonical JSON: sorted keys, no whitespace, so equal specs give equal strings."""
+        return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
+
+    @property
+    def hash(self) -> str:
+        return hashlib.sha256(self.to_json().encode()).hexdigest()[:16]
+
+    @property
+    def scene_hash(self) -> str:
+        """Identity of the physical scene (objects and poses), whatever the instruction says.
+
+        Poses are rounded to a millimetre so that a scene is recognised across splits.
+        """
+        scene = [
+            (o.kind, o.slot, [round(v, 3) for v in o.pos], round(o.yaw, 3), sorted(o.attributes.items()))
+            for o in sorted(self.objects, key=lambda o: o.id)
+        ]
+        return hashlib.sha256(json.dumps(scene, sort_keys=True).encode()).hexdigest()[:16]
+
+    def scene_record(self) -> dict[str, Any]:
+        """The `scene` column of meta/scenes.parquet."""
+        return {"objects": [{**asdict(o), "pos": list(o.pos)} for o in self.objects]}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> EpisodeSpec:
+        try:
+            version = d["version"]
+            if version != SPEC_VERSION:
+                raise SpecError(f"episode spec version {version} is not supported (expected {SPEC_VERSION})")
+            return cls(
+                referent=str(d["referent"]),
+                index=int(d["index"]),
+                seed=int(d["seed"]),
+                objects=tuple(
+                    SceneObject(
+                        id=o["id"],
+                        kind=o["kind"],
+                        name=o["name"],
+                        slot=int(o["slot"]),
+                        pos=tuple(float(v) for v in o["pos"]),  # type: ignore[arg-type]
+                        yaw=float(o["yaw"]),
+                        attributes=dict(o.get("attributes", {})),
+                    )
+                    for o in d["objects"]
+                ),
+                target=str(d["target"]),
+                instruction=str(d["instruction"]),
+                template=str(d["template"]),
+                counterfactuals=tuple(
+                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]))  # type: ignore[arg-type]
+                    for c in d["counterfactuals"]
+                ),
+                assets=tuple((str(k), int(n)) for k, n in d["assets"]),
+                task=TaskSpec(**d["task"]),
+                sim=SimSettings(
+                    image_size=int(d["sim"]["image_size"]),
+                    fps=int(d["sim"]["fps"]),
+                    cameras=tuple(d["sim"]["cameras"]),
+                    robot_home=tuple(float(v) for v in d["sim"]["robot_home"]),
+                ),
+                attempt=int(d["attempt"]),
+                version=version,
+            )
+        except SpecError:
+            raise
+        except (KeyError, TypeError, ValueError) as exc:
+            raise SpecError(f"malformed episode spec: {type(exc).__name__}: {exc}") from None
+
+    @classmethod
+    def from_json(cls, text: str) -> EpisodeSpec:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise SpecError(f"episode spec is not valid JSON: {exc}") from None
+        if not isinstance(data, dict):
+            raise SpecError("episode spec must be a JSON object")
+        return cls.from_dict(data)

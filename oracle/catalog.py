@@ -1,0 +1,73 @@
+"""The objects a scene can hold, with the geometry the planner needs before any simulation.
+
+Each kind names one of robosuite's object models (built in oracle/scene.py). Extents are
+stored here (measured from the compiled meshes; tests check them against the model) so that
+planning stays pure: no simulator is imported to know where an object rests or how tall it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# Named colors an instruction may use, as RGBA.
+COLORS: dict[str, tuple[float, float, float, float]] = {
+    "red": (0.85, 0.10, 0.10, 1.0),
+    "green": (0.10, 0.65, 0.15, 1.0),
+    "blue": (0.10, 0.25, 0.85, 1.0),
+    "yellow": (0.95, 0.85, 0.10, 1.0),
+    "purple": (0.55, 0.15, 0.70, 1.0),
+    "orange": (0.95, 0.50, 0.05, 1.0),
+    "white": (0.92, 0.92, 0.92, 1.0),
+    "black": (0.08, 0.08, 0.08, 1.0),
+}
+
+
+@dataclass(frozen=True)
+class Kind:
+    """A buildable object.
+
+    `model` is the robosuite class in `robosuite.models.objects`; `size` is the extent
+    (x, y, z) in the object's frame, `bottom` the height of its lowest point below the body
+    origin, and `grasp_axis` the object-frame axis ("x" or "y") the fingers close along: the
+    narrower one. Colorable kinds take their RGBA from the object's `color` attribute.
+    """
+
+    name: str
+    model: str
+    size: tuple[float, float, float]
+    bottom: float
+    grasp_axis: str = "y"
+    colorable: bool = False
+
+    @property
+    def height(self) -> float:
+        return self.size[2]
+
+    def rest_z(self, surface_z: float) -> float:
+        """Body-origin height when the object rests on a surface at `surface_z`."""
+        return surface_z + self.bottom
+
+    def grasp_depth(self) -> float:
+        """How far below the top the fingers close: near the top for tall objects."""
+        return min(0.03, self.height / 2)
+
+
+KINDS: dict[str, Kind] = {
+    k.name: k
+    for k in (
+        Kind("milk", "MilkObject", (0.040, 0.040, 0.144), 0.061),
+        Kind("can", "CanObject", (0.050, 0.050, 0.080), 0.040),
+        Kind("bottle", "BottleObject", (0.055, 0.059, 0.160), 0.065, grasp_axis="x"),
+        Kind("bread", "BreadObject", (0.048, 0.040, 0.048), 0.023),
+        Kind("cereal", "CerealObject", (0.100, 0.030, 0.150), 0.075),
+        Kind("lemon", "LemonObject", (0.068, 0.040, 0.040), 0.020),
+        Kind("block", "BoxObject", (0.040, 0.040, 0.040), 0.020, colorable=True),
+    )
+}
+
+
+def kind(name: str) -> Kind:
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise KeyError(f"unknown object kind {name!r}; known: {', '.join(sorted(KINDS))}") from None

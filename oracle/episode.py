@@ -1,0 +1,56 @@
+"""One episode in the simulator: demonstrate it with a plan, or replay recorded actions.
+
+Generation demonstrates first without rendering (physics is cheap) and only replays verified
+demos with cameras on: MuJoCo is deterministic, so the replay is the demonstration, and a failed
+demo never costs a rendered frame or a written byte.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from gen.spec import EpisodeSpec
+from oracle.ik import ArmIK, IKError
+from oracle.scene import Scene
+from oracle.skills import Skills
+from oracle.success import Outcome, measure, start_positions, succeeded
+
+Plan = Callable[[Skills, EpisodeSpec], None]
+
+
+@dataclass
+class Demo:
+    spec: EpisodeSpec
+    actions: np.ndarray  # (T, 8) float32, exactly what was executed
+    outcome: Outcome | None  # None when the plan could not be executed (e.g. IK failed)
+    success: bool
+    failure: str = ""
+
+
+def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
+    scene.reset(spec)
+    start = start_positions(scene, spec)
+    skills = Skills(scene, ik, spec)
+    try:
+        plan(skills, spec)
+    except IKError as exc:
+        return Demo(spec, np.asarray(skills.actions, np.float32).reshape(-1, 8), None, False, str(exc))
+    outcome = measure(scene, spec, start)
+    ok = succeeded(spec, outcome)
+    return Demo(spec, np.asarray(skills.actions, np.float32), outcome, ok, "" if ok else "success predicate false")
+
+
+def replay(
+    scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callable[[int], None] | None = None
+) -> Outcome:
+    """Re-execute `actions` from the spec's initial state; `observe(t)` runs before action t."""
+    scene.reset(spec)
+    start = start_positions(scene, spec)
+    for t, action in enumerate(actions):
+        if observe is not None:
+            observe(t)
+        scene.step(action)
+    return measure(scene, spec, start)

@@ -1,0 +1,59 @@
+"""Top-down grasp poses -> arm joint angles, with mink's differential IK on the robot alone."""
+
+from __future__ import annotations
+
+import mink
+import mujoco
+import numpy as np
+
+from oracle.scene import EE_SITE, FINGER_OPEN, robot_xml
+
+# The grip site pointing straight down, fingers closing along world y (yaw 0).
+DOWN = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+class IKError(RuntimeError):
+    """The pose is out of reach: IK did not converge."""
+
+
+def yaw_matrix(yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def grasp_yaw(axis_angle: float) -> float:
+    """Gripper yaw whose fingers close along the world direction `axis_angle`.
+
+    The hand is symmetric, so the yaw is taken in (-pi/2, pi/2]: the wrist never winds up.
+    """
+    yaw = axis_angle - np.pi / 2
+    return float((yaw + np.pi / 2) % np.pi - np.pi / 2)
+
+
+class ArmIK:
+    """Solves for the arm joints that put the grip site at a position, pointing down, at a yaw.
+
+    A posture task toward the home pose keeps solutions in the same elbow-up family, so ruckig
+    segments between them stay short and smooth.
+    """
+
+    def __init__(self, home: np.ndarray, tol: float = 1e-3, max_iters: int = 300) -> None:
+        self.model = mujoco.MjModel.from_xml_string(robot_xml())
+        self.config = mink.Configuration(self.model)
+        self.frame = mink.FrameTask(EE_SITE, "site", position_cost=1.0, orientation_cost=1.0)
+        self.posture = mink.PostureTask(self.model, cost=1e-3)
+        self.posture.set_target(np.concatenate([home, [FINGER_OPEN, -FINGER_OPEN]]))
+        self.tol = tol
+        self.max_iters = max_iters
+
+    def solve(self, pos: np.ndarray, yaw: float, seed: np.ndarray) -> np.ndarray:
+        self.config.update(np.concatenate([seed, [FINGER_OPEN, -FINGER_OPEN]]))
+        target = mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(yaw_matrix(yaw) @ DOWN), np.asarray(pos))
+        self.frame.set_target(target)
+        for _ in range(self.max_iters):
+            velocity = mink.solve_ik(self.config, [self.frame, self.posture], 0.1, "quadprog", damping=1e-3)
+            self.config.integrate_inplace(velocity, 0.1)
+            err = self.frame.compute_error(self.config)
+            if np.linalg.norm(err[:3]) < self.tol and np.linalg.norm(err[3:]) < self.tol:
+                return self.config.q[:7].copy()
+        raise IKError(f"no IK solution within {self.tol} for position {np.round(pos, 3).tolist()} yaw {yaw:.2f}")

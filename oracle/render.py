@@ -1,0 +1,40 @@
+"""The dataset's cameras, rendered on the CPU with the fast settings.
+
+MuJoCo's defaults (4x MSAA, shadows, reflections, collision geoms) cost about 4x more per frame
+on llvmpipe; none of them helps a policy (README: rendering).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from oracle.scene import Scene
+from oracle.world import CAMERAS
+
+
+class Cameras:
+    def __init__(self, scene: Scene, size: int, cameras: tuple[str, ...]) -> None:
+        unknown = [c for c in cameras if c not in CAMERAS]
+        if unknown:
+            raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(CAMERAS)}")
+        self.scene = scene
+        self.cameras = cameras
+        self.renderer = mujoco.Renderer(scene.model, size, size)
+        flags = self.renderer.scene.flags
+        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):
+            flags[flag] = False
+        self.option = mujoco.MjvOption()
+        self.option.geomgroup[0] = False  # collision geoms
+        self.option.sitegroup[:] = False
+        self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
+
+    def render(self) -> dict[str, np.ndarray]:
+        """One frame per camera; the arrays are reused by the next call."""
+        for cam in self.cameras:
+            self.renderer.update_scene(self.scene.data, camera=CAMERAS[cam], scene_option=self.option)
+            self.renderer.render(out=self._buffers[cam])
+        return self._buffers
+
+    def close(self) -> None:
+        self.renderer.close()

@@ -1,0 +1,84 @@
+"""Bad input gets one clear line and a non-zero exit, and never destroys or half-writes data."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+def run_gen(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "MUJOCO_GL": "egl"}
+    return subprocess.run([sys.executable, "-m", "gen", *args], capture_output=True, text=True, env=env, cwd=cwd)
+
+
+@pytest.fixture
+def existing(tmp_path: Path) -> Path:
+    """A folder that already holds something the user cares about."""
+    out = tmp_path / "precious"
+    out.mkdir()
+    (out / "keep.txt").write_text("do not delete")
+    return out
+
+
+def _untouched(out: Path) -> bool:
+    return sorted(p.name for p in out.iterdir()) == ["keep.txt"] and (out / "keep.txt").read_text() == "do not delete"
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["referent=nonsense"], "unknown referent 'nonsense'"),
+        (["n=0"], "n must be a positive"),
+        (["n=-5"], "n must be a positive"),
+        (["frobnicate=3"], "unknown option 'frobnicate'"),
+        (["n=many"], "n: Value 'many'"),
+        (["image_size=13"], "image_size"),
+        (["fps=7"], "fps must divide"),
+        (["codec=mpeg2"], "codec must be one of"),
+        (["n"], "key=value"),
+    ],
+)
+def test_bad_options_get_one_line(existing: Path, args: list[str], needle: str) -> None:
+    result = run_gen(*args, f"out={existing}", "overwrite=true")
+    assert result.returncode != 0
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], result.stderr
+    assert _untouched(existing)
+
+
+def test_non_empty_out_needs_overwrite(existing: Path) -> None:
+    result = run_gen("n=1", f"out={existing}")
+    assert result.returncode != 0
+    assert "not empty" in result.stderr and "overwrite=true" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert _untouched(existing)
+
+
+def test_unwritable_out(tmp_path: Path) -> None:
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    for out in (blocker / "ds", Path("/proc/deconfound/ds")):
+        result = run_gen("n=1", f"out={out}")
+        assert result.returncode != 0
+        assert len(result.stderr.strip().splitlines()) == 1 and "not writable" in result.stderr, result.stderr
+    assert blocker.read_text() == "x"
+
+
+def test_bad_spec_file_is_named(tmp_path: Path, existing: Path) -> None:
+    spec = tmp_path / "bad.yaml"
+    spec.write_text("type: object\nobjects_per_scene: 4\nobjects: [{kind: unicorn, name: unicorn}]\nlayout: {slots: [[0, 0]]}\ntemplates: ['x']\n")
+    result = run_gen(f"spec={spec}", f"out={existing}", "overwrite=true")
+    assert result.returncode != 0 and "objects[0].kind" in result.stderr and "unicorn" in result.stderr
+    assert _untouched(existing)
+
+
+def test_overwrite_replaces_only_when_done(existing: Path) -> None:
+    result = run_gen("n=1", "image_size=32", f"out={existing}", "overwrite=true")
+    assert result.returncode == 0, result.stderr
+    assert (existing / "meta/info.json").exists() and not (existing / "keep.txt").exists()
+    assert "wrote 1 episodes" in result.stdout
+    assert not [p for p in existing.parent.iterdir() if p.name.startswith(".")], "staging left behind"
