@@ -1,8 +1,8 @@
-"""The dataset card (README.md at the dataset root): what was generated, and how to redo it."""
+"""The dataset card (README.md at the dataset root): what was deconfounded, the audit that
+shows it, and how to regenerate the data."""
 
 from __future__ import annotations
 
-from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -28,35 +28,76 @@ configs:
 
 
 def command(cfg: GenConfig) -> str:
+    """The `python -m gen ...` line that regenerates a dataset made with `cfg`."""
     parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
-    if cfg.codec != "h264":
-        parts.append(f"codec={cfg.codec}")
-    if cfg.spec:
-        parts.append(f"spec={cfg.spec}")
-    if cfg.objects_per_scene is not None:
-        parts.append(f"objects_per_scene={cfg.objects_per_scene}")
+    for name in ("codec", "spec", "objects_per_scene", "confound"):
+        value = getattr(cfg, name)
+        if value is not None and value != GenConfig.__dataclass_fields__[name].default:
+            parts.append(f"{name}={value}")
+    for name in ("holdout", "distractor_only"):
+        if getattr(cfg, name):
+            parts.append(f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'")
+    if cfg.plan_only:
+        parts.append("plan_only=true")
     return "python -m gen " + " ".join(parts)
 
 
-def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary) -> None:
+def audit_tables(report: dict) -> str:
+    """The audit as markdown: one row per variable, then the role balance per value."""
+    lines = [
+        f"**Verdict: {report['verdict']}** ({report['episodes']} episodes, chance {report['chance']:.0%}; {report['method']}).",
+        "",
+        "| variable | held-out accuracy | 95% CI | chance | leak |",
+        "|---|---|---|---|---|",
+    ]
+    for v in report["variables"]:
+        flag = ("yes (requested)" if v["expected"] else "**YES**") if v["leak"] else "no"
+        lines.append(f"| {v['variable']} | {v['rate']:.1%} ({v['k']}/{v['n']}) | {v['ci'][0]:.1%}–{v['ci'][1]:.1%} | {v['chance']:.0%} | {flag} |")
+    lines += ["", "| value | as target | as distractor | slots as target | slots as distractor |", "|---|---|---|---|---|"]
+    for value, roles in report["balance"].items():
+        t, d = roles["target"], roles["distractor"]
+        lines.append(f"| {value} | {sum(t.values())} | {sum(d.values())} | {len(t)} | {len(d)} |")
+    return "\n".join(lines)
+
+
+def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
     rc = referent.config
-    objects = "\n".join(f"| {c.key} | {c.kind} |" for c in rc.objects)
+    objects = "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
     templates = "\n".join(f"- `{t}`" for t in rc.templates)
-    k = rc.objects_per_scene
+    vocabulary = ""
+    if rc.holdout or rc.distractor_only:
+        vocabulary = (
+            f"\nVocabulary control: held out entirely: {', '.join(rc.holdout) or 'none'}; "
+            f"distractor only (never the target): {', '.join(rc.distractor_only) or 'none'}.\n"
+        )
+    if rc.confound:
+        vocabulary += f"\n**Deliberately confounded (`confound={rc.confound}`)**: made to reproduce instruction blindness, not to train on.\n"
+    contents = (
+        f"A plan of {summary.episodes} episodes (`plan_only=true`: scene records and audit only, nothing simulated)."
+        if summary.plan_only
+        else f"{summary.episodes} oracle-verified demonstrations ({summary.frames} frames at {cfg.fps} Hz) of a Panda arm in "
+        f"MuJoCo. Format: LeRobot v3.0 (`observation.images.agentview`, `observation.images.wrist`, "
+        f"`observation.state`, `action`). Oracle success before retries: "
+        f"{summary.episodes}/{summary.episodes + summary.failed_attempts}."
+    )
     text = FRONT_MATTER.format(referent=referent.name) + f"""
 # Deconfounded `{referent.name}` dataset
 
-{summary.episodes} oracle-verified demonstrations ({summary.frames} frames at {cfg.fps} Hz) of a Panda
-arm in MuJoCo, {k} objects per scene, in which the instruction is the only predictor of the target:
-every object is the target equally often, in every slot, and appears as a distractor in every slot.
-Format: LeRobot v3.0 (`observation.images.agentview`, `observation.images.wrist`,
-`observation.state`, `action`); per-episode scene records and counterfactual instructions are in
-`meta/scenes.parquet`.
+{contents}
+
+The instruction names the target by its **{rc.naming}**; every value of it is the target and a
+distractor across slots, with {rc.objects_per_scene} objects per scene, all in view. Per-episode
+scene records and the one-word counterfactual instructions are in `meta/scenes.parquet`; the
+confound audit is in `meta/audit.json`.
+{vocabulary}
+## Confound audit
+
+{audit_tables(report)}
 
 ## Objects
 
-| object | model |
-|---|---|
+| object | model | |
+|---|---|---|
 {objects}
 
 ## Instruction templates
@@ -68,14 +109,5 @@ Format: LeRobot v3.0 (`observation.images.agentview`, `observation.images.wrist`
 ```
 {command(cfg)}
 ```
-
-Oracle success before retries: {summary.episodes}/{summary.episodes + summary.failed_attempts}.
-Targets per object: {dict(sorted(Counter(_targets(root)).items()))}.
 """
     (root / "README.md").write_text(text)
-
-
-def _targets(root: Path) -> list[str]:
-    from gen import scenes
-
-    return list(scenes.read(root)["target"])

@@ -10,7 +10,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
+from typing import List, Optional
 
 from hydra import compose, initialize
 from hydra.core.config_store import ConfigStore
@@ -39,6 +39,10 @@ class GenConfig:
     max_attempts: int = 10  # oracle attempts per episode before generation stops
     spec: Optional[str] = None  # a referent spec file instead of referents/<referent>.yaml
     objects_per_scene: Optional[int] = None  # override the referent spec's objects_per_scene
+    plan_only: bool = False  # write the plan (meta/scenes.parquet) and its audit, simulate nothing
+    holdout: Optional[List[str]] = None  # values kept out of the dataset entirely
+    distractor_only: Optional[List[str]] = None  # values that appear but are never the target
+    confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
 
 
 ConfigStore.instance().store(name="gen", node=GenConfig)

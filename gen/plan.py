@@ -43,8 +43,8 @@ def realize(referent: Referent, design: Design, index: int, seed: int, sim: SimS
         instruction=design.instruction,
         template=design.template,
         counterfactuals=design.counterfactuals,
-        assets=referent.config.assets(),
-        task=referent.config.task,
+        assets=referent.assets(),
+        task=design.task or referent.config.task,
         sim=sim,
         attempt=attempt,
     )

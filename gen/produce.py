@@ -45,9 +45,12 @@ class Producer:
         self.referent = referent
         self.sim = sim
         self.codec = codec
-        self.scene: Scene = scene_for(referent.config.assets())
+        self.scene: Scene = scene_for(referent.assets())
         self.ik = ArmIK(np.asarray(sim.robot_home))
         self.cameras = Cameras(self.scene, sim.image_size, sim.cameras)
+
+    def close(self) -> None:
+        self.cameras.close()
 
     def demonstrate(self, design: Design, index: int, seed: int, max_attempts: int) -> tuple[Demo, list[str]]:
         failures: list[str] = []

@@ -1,4 +1,4 @@
-"""Generation: plan -> verified oracle demos -> LeRobot dataset.
+"""Generation: plan -> confound audit -> verified oracle demos -> LeRobot dataset.
 
 Everything is written into a staging folder beside `out` and moved into place in one rename
 once complete, so a failed or interrupted run never leaves a half-written dataset at `out` and
@@ -9,27 +9,24 @@ from __future__ import annotations
 
 import json
 import os
+from importlib import metadata
 import platform
 import shutil
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import mujoco
-from tqdm import tqdm
-
 import referents
 from gen import __version__, card, scenes
+from gen.audit import agree, audit
 from gen.config import GenConfig, UserError
-from gen.lerobot_writer import Layout, LeRobotWriter
-from gen.plan import designs
-from gen.produce import DemoFailed, Producer
-from gen.spec import SimSettings
-from oracle.scene import ACTION_NAMES, STATE_NAMES
+from gen.plan import designs, realize
+from gen.spec import EpisodeSpec, SimSettings
 from referents import Referent, UnknownReferent
 from referents.base import ReferentSpecError
 
 GENERATION_PATH = "meta/generation.json"
+AUDIT_PATH = "meta/audit.json"
 
 
 @dataclass
@@ -39,20 +36,33 @@ class Summary:
     frames: int
     failed_attempts: int
     seconds: float
+    verdict: str
+    plan_only: bool = False
 
     def __str__(self) -> str:
+        if self.plan_only:
+            return (
+                f"planned {self.episodes} episodes to {self.out} (nothing simulated) in {self.seconds:.1f} s\n"
+                f"confound audit: {self.verdict}"
+            )
         attempts = self.episodes + self.failed_attempts
         return (
             f"wrote {self.episodes} episodes ({self.frames} frames) to {self.out}\n"
             f"oracle: {self.failed_attempts} failed demos resampled; success before retries "
             f"{self.episodes}/{attempts} = {self.episodes / attempts:.1%}\n"
+            f"confound audit: {self.verdict}\n"
             f"wall time {self.seconds:.1f} s, {self.frames / self.seconds:.1f} frames/s, "
             f"{self.seconds / self.episodes:.2f} s/episode"
         )
 
 
 def load_referent(cfg: GenConfig) -> Referent:
-    overrides = {"objects_per_scene": cfg.objects_per_scene} if cfg.objects_per_scene is not None else None
+    overrides = {
+        "objects_per_scene": cfg.objects_per_scene,
+        "holdout": cfg.holdout,
+        "distractor_only": cfg.distractor_only,
+        "confound": cfg.confound,
+    }
     try:
         return referents.load(cfg.referent, cfg.spec, overrides)
     except (UnknownReferent, ReferentSpecError) as exc:
@@ -63,36 +73,80 @@ def sim_settings(cfg: GenConfig) -> SimSettings:
     return SimSettings(image_size=cfg.image_size, fps=cfg.fps)
 
 
+def check_audit(report: dict) -> None:
+    """A plan whose audit finds a leak nobody asked for is refused, naming the variable."""
+    if report["unexpected_leaks"]:
+        worst = {v["variable"]: v for v in report["variables"]}
+        detail = ", ".join(
+            f"{name} (held-out accuracy {worst[name]['rate']:.0%} vs chance {report['chance']:.0%})"
+            for name in report["unexpected_leaks"]
+        )
+        raise UserError(f"the {report['referent']} plan fails its confound audit: {detail} predicts the target")
+
+
 def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     start = time.perf_counter()
     referent = load_referent(cfg)
     sim = sim_settings(cfg)
-    plan = designs(referent, cfg.n, cfg.seed)
+    try:
+        plan = designs(referent, cfg.n, cfg.seed)
+    except ReferentSpecError as exc:
+        raise UserError(str(exc)) from None
+    planned = [realize(referent, d, i, cfg.seed, sim) for i, d in enumerate(plan)]
+    audits: dict = {"planned": audit(referent, planned)}
+    check_audit(audits["planned"])
     out = Path(cfg.out or f"datasets/{referent.name}")
     staging = out.parent / f".{out.name}.staging-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
     try:
-        writer = LeRobotWriter(staging, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
-        producer = Producer(referent, sim, cfg.codec)
-        rows, failed = [], 0
-        bar = tqdm(plan, desc=f"{referent.name}", unit="ep", disable=not progress, dynamic_ncols=True)
-        for i, design in enumerate(bar):
-            try:
-                produced = producer.produce(design, i, cfg.seed, cfg.max_attempts)
-            except DemoFailed as exc:
-                raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
-            failed += len(produced.failures)
-            rows.append(scenes.row(writer.add(produced.episode), produced))
-            bar.set_postfix(retries=failed)
-        writer.finalize()
+        (staging / "meta").mkdir(parents=True)
+        if cfg.plan_only:
+            rows = [scenes.row(i, spec) for i, spec in enumerate(planned)]
+            frames = failed = 0
+        else:
+            rows, frames, failed, written = _simulate(cfg, referent, sim, plan, staging, progress)
+            audits["written"] = audit(referent, written)
+            audits["agree"] = agree(audits["planned"], audits["written"])
+            if not audits["agree"]:
+                raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
         scenes.write(staging, rows)
-        summary = Summary(out, len(rows), writer.frames, failed, time.perf_counter() - start)
+        (staging / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
+        final = audits.get("written", audits["planned"])
+        summary = Summary(out, len(rows), frames, failed, time.perf_counter() - start, final["verdict"], cfg.plan_only)
         _write_generation(staging, cfg, referent, summary)
-        card.write(staging, referent, cfg, summary)
+        card.write(staging, referent, cfg, summary, final)
         _publish(staging, out)
         return summary
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _simulate(
+    cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, root: Path, progress: bool
+) -> tuple[list[dict], int, int, list[EpisodeSpec]]:
+    """Demonstrate, verify and record every planned episode into the dataset at `root`."""
+    from tqdm import tqdm
+
+    from gen.lerobot_writer import Layout, LeRobotWriter
+    from gen.produce import DemoFailed, Producer
+    from oracle.scene import ACTION_NAMES, STATE_NAMES
+
+    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
+    producer = Producer(referent, sim, cfg.codec)
+    rows, written, failed = [], [], 0
+    bar = tqdm(plan, desc=referent.name, unit="ep", disable=not progress, dynamic_ncols=True)
+    for i, design in enumerate(bar):
+        try:
+            produced = producer.produce(design, i, cfg.seed, cfg.max_attempts)
+        except DemoFailed as exc:
+            raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
+        failed += len(produced.failures)
+        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
+        written.append(produced.spec)
+        bar.set_postfix(retries=failed)
+    writer.finalize()
+    producer.close()
+    return rows, writer.frames, failed, written
 
 
 def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: Summary) -> None:
@@ -100,10 +154,12 @@ def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: S
     record = {
         "generator": "deconfound",
         "generator_version": __version__,
-        "mujoco": mujoco.__version__,
+        "mujoco": metadata.version("mujoco"),
+        "robosuite": metadata.version("robosuite"),
         "python": platform.python_version(),
         "config": asdict(cfg),
         "referent_spec": asdict(referent.config),
+        "plan_only": cfg.plan_only,
         "episodes": summary.episodes,
         "failed_attempts": summary.failed_attempts,
         "seconds": round(summary.seconds, 2),

@@ -4,8 +4,9 @@ Columns: episode_index (int), referent, instruction, target (an object id), scen
 `{"objects": [{"id", "kind", "name", "slot", "pos", "yaw", "attributes"}]}`), counterfactuals
 (JSON list of `{"instruction", "target", "changed"}`), spec (the full episode spec as JSON),
 spec_hash, scene_hash, failed_attempts (oracle attempts before the recorded one),
-initial_state (MuJoCo mjSTATE_INTEGRATION vector at frame 0) and outcome (JSON: each object's
-rise and horizontal displacement, the final end-effector position).
+initial_state (MuJoCo mjSTATE_INTEGRATION vector at frame 0) and outcome (JSON: every object's
+start and end position, the final end-effector position). A plan (`plan_only=true`) leaves the
+last three empty.
 """
 
 from __future__ import annotations
@@ -13,20 +14,23 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gen.produce import Produced
 from gen.spec import EpisodeSpec
+
+if TYPE_CHECKING:
+    from gen.produce import Produced
 
 SCENES_PATH = "meta/scenes.parquet"
 
 
-def row(episode_index: int, produced: Produced) -> dict:
-    spec = produced.spec
+def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None) -> dict:
+    """A scene record; without `produced` (a plan), the simulation columns are empty."""
     return {
         "episode_index": episode_index,
         "referent": spec.referent,
@@ -37,9 +41,9 @@ def row(episode_index: int, produced: Produced) -> dict:
         "spec": spec.to_json(),
         "spec_hash": spec.hash,
         "scene_hash": spec.scene_hash,
-        "failed_attempts": len(produced.failures),
-        "initial_state": produced.initial_state.astype(np.float64).tolist(),
-        "outcome": json.dumps(asdict(produced.outcome)),
+        "failed_attempts": len(produced.failures) if produced else None,
+        "initial_state": produced.initial_state.astype(np.float64).tolist() if produced else None,
+        "outcome": json.dumps(asdict(produced.outcome)) if produced else None,
     }
 
 

@@ -43,11 +43,16 @@ class SceneObject:
 
 @dataclass(frozen=True)
 class Counterfactual:
-    """The instruction with one word changed, and the object (or program) it then names."""
+    """The instruction with one word (or phrase) changed, and what it then asks for.
+
+    `target` is the object the changed instruction names; `program` is set when the change
+    names another motor program (e.g. "lift" -> "push") and is None when it keeps the episode's.
+    """
 
     instruction: str
     target: str
     changed: tuple[str, str]
+    program: str | None = None
 
 
 @dataclass(frozen=True)
@@ -92,6 +97,12 @@ class EpisodeSpec:
     sim: SimSettings = SimSettings()
     attempt: int = 0
     version: int = SPEC_VERSION
+
+    def choice(self, cf: Counterfactual | None = None) -> tuple[str, str]:
+        """(object, program) the instruction, or a counterfactual of it, asks for."""
+        if cf is None:
+            return self.target, self.task.program
+        return cf.target, cf.program or self.task.program
 
     def object(self, object_id: str) -> SceneObject:
         for obj in self.objects:
@@ -152,7 +163,7 @@ class EpisodeSpec:
                 instruction=str(d["instruction"]),
                 template=str(d["template"]),
                 counterfactuals=tuple(
-                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]))  # type: ignore[arg-type]
+                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]), c.get("program"))  # type: ignore[arg-type]
                     for c in d["counterfactuals"]
                 ),
                 assets=tuple((str(k), int(n)) for k, n in d["assets"]),

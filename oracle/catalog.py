@@ -7,7 +7,8 @@ planning stays pure: no simulator is imported to know where an object rests or h
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 # Named colors an instruction may use, as RGBA.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -26,10 +27,12 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 class Kind:
     """A buildable object.
 
-    `model` is the robosuite class in `robosuite.models.objects`; `size` is the extent
-    (x, y, z) in the object's frame, `bottom` the height of its lowest point below the body
-    origin, and `grasp_axis` the object-frame axis ("x" or "y") the fingers close along: the
-    narrower one. Colorable kinds take their RGBA from the object's `color` attribute.
+    `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
+    arguments; `size` is the extent (x, y, z) in the object's frame, `bottom` the height of its
+    lowest point below the body origin, and `grasp_axis` the object-frame axis ("x" or "y") the
+    fingers close along: the narrower one. Colorable kinds take their RGBA from the object's
+    `color` attribute. Destinations (plate, basket) are placed on, not grasped; `inner` is the
+    half-width of the area an object must land in.
     """
 
     name: str
@@ -38,10 +41,16 @@ class Kind:
     bottom: float
     grasp_axis: str = "y"
     colorable: bool = False
+    params: dict[str, Any] = field(default_factory=dict)
+    inner: float = 0.0
 
     @property
     def height(self) -> float:
         return self.size[2]
+
+    @property
+    def is_destination(self) -> bool:
+        return self.inner > 0
 
     def rest_z(self, surface_z: float) -> float:
         """Body-origin height when the object rests on a surface at `surface_z`."""
@@ -50,6 +59,10 @@ class Kind:
     def grasp_depth(self) -> float:
         """How far below the top the fingers close: near the top for tall objects."""
         return min(0.03, self.height / 2)
+
+
+def _cube(side: float) -> dict[str, Any]:
+    return {"size": [side / 2] * 3}
 
 
 KINDS: dict[str, Kind] = {
@@ -61,7 +74,20 @@ KINDS: dict[str, Kind] = {
         Kind("bread", "BreadObject", (0.048, 0.040, 0.048), 0.023),
         Kind("cereal", "CerealObject", (0.100, 0.030, 0.150), 0.075),
         Kind("lemon", "LemonObject", (0.068, 0.040, 0.040), 0.020),
-        Kind("block", "BoxObject", (0.040, 0.040, 0.040), 0.020, colorable=True),
+        Kind("block", "BoxObject", (0.040, 0.040, 0.040), 0.020, colorable=True, params=_cube(0.04)),
+        Kind("block_small", "BoxObject", (0.030, 0.030, 0.030), 0.015, colorable=True, params=_cube(0.03)),
+        Kind("block_large", "BoxObject", (0.056, 0.056, 0.056), 0.028, colorable=True, params=_cube(0.056)),
+        Kind("cylinder", "CylinderObject", (0.040, 0.040, 0.060), 0.030, colorable=True, params={"size": [0.02, 0.03]}),
+        Kind("ball", "BallObject", (0.056, 0.056, 0.056), 0.028, colorable=True, params={"size": [0.028]}),
+        Kind("plate", "CylinderObject", (0.150, 0.150, 0.012), 0.006, params={"size": [0.075, 0.006], "rgba": [0.95, 0.95, 0.92, 1]}, inner=0.06),
+        Kind(
+            "basket",
+            "Bin",
+            (0.150, 0.150, 0.060),
+            0.030,
+            params={"bin_size": [0.15, 0.15, 0.06], "wall_thickness": 0.008, "transparent_walls": False, "use_texture": False, "rgba": [0.55, 0.35, 0.15, 1]},
+            inner=0.055,
+        ),
     )
 }
 

@@ -64,10 +64,7 @@ def _robot():
 
 
 def _build_object(kind: catalog.Kind, name: str) -> rs_objects.MujocoObject:
-    cls = getattr(rs_objects, kind.model)
-    if kind.model == "BoxObject":
-        return cls(name, size=[s / 2 for s in kind.size], rgba=[0.5, 0.5, 0.5, 1.0])
-    return cls(name)
+    return getattr(rs_objects, kind.model)(name, **kind.params)
 
 
 def _lookat_quat(pos: tuple[float, ...], target: tuple[float, ...]) -> np.ndarray:
@@ -92,7 +89,7 @@ def _servo_and_gravcomp(root: ET.Element) -> None:
         motor.set("kp", str(SERVO_KP[i]))
         motor.set("kv", str(SERVO_KV[i]))
     for body in root.iter("body"):
-        if body.get("name", "").startswith(("robot0_", "gripper0_", "mount0_")):
+        if body.get("name", "").startswith(("robot0_", "gripper0_")):
             body.set("gravcomp", "1")
 
 
@@ -172,7 +169,7 @@ class Scene:
             for i in range(count):
                 name = f"{kind_name}{i}"
                 joint = m.joint(f"{name}_joint0")
-                body_id = m.body(f"{name}_main").id
+                body_id = int(m.jnt_bodyid[joint.id])
                 geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] == body_id)
                 x, y = spots[index % len(spots)]
                 park = np.array([x, y, kind.rest_z(0.0) + 0.001 * (index // len(spots)), 1, 0, 0, 0])

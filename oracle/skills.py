@@ -13,6 +13,7 @@ from gen.spec import EpisodeSpec
 from oracle import catalog
 from oracle.ik import ArmIK, grasp_yaw
 from oracle.scene import Scene
+from oracle.success import PUSH_DIRECTION
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
@@ -28,6 +29,7 @@ class Skills:
         self.q = np.asarray(spec.sim.robot_home, dtype=float)
         self.yaw = 0.0
         self.gripper = OPEN
+        self.held: tuple[str, float] | None = None  # (object id, grip site height above its bottom)
         self.actions: list[np.ndarray] = []
 
     def _execute(self, q: np.ndarray) -> None:
@@ -36,6 +38,21 @@ class Skills:
         self.scene.step(action)
         self.actions.append(action)
 
+    def _kind(self, object_id: str) -> catalog.Kind:
+        return catalog.kind(self.spec.object(object_id).kind)
+
+    def bottom_of(self, object_id: str) -> np.ndarray:
+        """Centre of the object's bottom face, from its current simulated pose."""
+        pos = self.scene.object_pos(object_id)
+        return np.array([pos[0], pos[1], pos[2] - self._kind(object_id).bottom])
+
+    def top_of(self, object_id: str) -> np.ndarray:
+        return self.bottom_of(object_id) + [0.0, 0.0, self._kind(object_id).height]
+
+    def clearance(self, margin: float = 0.05) -> float:
+        """A height at which the hand passes over every object in the scene."""
+        return max(self.top_of(o.id)[2] for o in self.spec.objects) + margin
+
     def move_to(self, pos: np.ndarray, yaw: float | None = None) -> None:
         """Grip site to `pos`, pointing down, at `yaw` (default: keep the current yaw)."""
         yaw = self.yaw if yaw is None else yaw
@@ -43,6 +60,17 @@ class Skills:
         for q in joint_path(self.q, goal, self.dt, self.limits):
             self._execute(q)
         self.q, self.yaw = goal, yaw
+
+    def move_linear(self, pos: np.ndarray, speed: float = 0.12) -> None:
+        """Grip site along a straight line to `pos` (minimum-jerk timing), e.g. to push."""
+        start = self.scene.ee_pos()
+        goal = np.asarray(pos, dtype=float)
+        steps = max(2, int(np.ceil(np.linalg.norm(goal - start) / (speed * self.dt))))
+        for k in range(1, steps + 1):
+            tau = k / steps
+            s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+            self.q = self.ik.solve(start + s * (goal - start), self.yaw, seed=self.q)
+            self._execute(self.q)
 
     def hold(self, steps: int) -> None:
         for _ in range(steps):
@@ -54,32 +82,53 @@ class Skills:
 
     def open(self, steps: int = 6) -> None:
         self.gripper = OPEN
+        self.held = None
         self.hold(steps)
-
-    def top_of(self, object_id: str) -> np.ndarray:
-        """The centre of the object's top face, from its current simulated pose."""
-        kind = catalog.kind(self.spec.object(object_id).kind)
-        pos = self.scene.object_pos(object_id)
-        return np.array([pos[0], pos[1], pos[2] - kind.bottom + kind.height])
 
     def grasp(self, object_id: str, approach: float = 0.07) -> None:
         """Come down on the object from above, fingers across its narrow axis, and close."""
-        kind = catalog.kind(self.spec.object(object_id).kind)
+        kind = self._kind(object_id)
         top = self.top_of(object_id)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
         yaw = grasp_yaw(axis)
-        self.move_to(top + [0.0, 0.0, approach], yaw)
-        self.move_to(top - [0.0, 0.0, kind.grasp_depth()], yaw)
+        self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
+        grip = top - [0.0, 0.0, kind.grasp_depth()]
+        self.move_to(grip, yaw)
         self.close()
+        self.held = (object_id, kind.height - kind.grasp_depth())
 
     def lift(self, height: float = 0.15) -> None:
         self.move_to(self.scene.ee_pos() + [0.0, 0.0, height])
         self.hold(2)
 
-    def place(self, pos: np.ndarray, clearance: float = 0.08) -> None:
-        """Carry what is held over `pos` (the held object's bottom lands there), release, retreat."""
-        drop = np.asarray(pos, dtype=float)
-        self.move_to(np.array([drop[0], drop[1], self.scene.ee_pos()[2] + 0.0]))
-        self.move_to(drop + [0.0, 0.0, clearance])
+    def place(self, destination_id: str, clearance: float = 0.015) -> None:
+        """Carry the held object over the destination, lower it onto it, release, retreat."""
+        if self.held is None:
+            raise RuntimeError("place() needs an object in the gripper: grasp() first")
+        over = self.top_of(destination_id)
+        release_z = over[2] + self.held[1] + clearance
+        carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
+        self.move_to([over[0], over[1], carry_z])
+        self.move_to([over[0], over[1], release_z])
         self.open()
-        self.move_to(drop + [0.0, 0.0, clearance + 0.08])
+        self.move_to([over[0], over[1], release_z + 0.1])
+
+    def push(self, object_id: str, distance: float = 0.09, speed: float = 0.12) -> None:
+        """Slide the object along the table (away from the robot) with the closed fingers.
+
+        The fingers come down well behind the object on a straight line, so they never land on
+        it. Short objects would wedge under the tapered fingertips, so they are pushed with one
+        finger's flat outer face (fingers one behind the other); tall ones with both side by side.
+        """
+        kind = self._kind(object_id)
+        direction = np.array([*PUSH_DIRECTION, 0.0])
+        gap = 0.04
+        reach = float(np.hypot(kind.size[0], kind.size[1])) / 2 + gap
+        height = min(0.03, kind.height / 2)  # grip-site height above the object's bottom
+        behind = self.bottom_of(object_id) - reach * direction + [0.0, 0.0, height]
+        self.gripper = CLOSED
+        yaw = np.pi / 2 if kind.height < 0.07 else 0.0
+        self.move_to(behind + [0.0, 0.0, 0.08], yaw=yaw)
+        self.move_linear(behind)
+        self.move_linear(behind + (distance + gap) * direction, speed=speed)
+        self.move_to(self.scene.ee_pos() + [0.0, 0.0, 0.1])

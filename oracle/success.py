@@ -1,7 +1,13 @@
-"""Success predicates: lift-gated and false at the initial state by construction.
+"""Success predicates, one per motor program: false at the initial state by construction.
 
 Every measure is relative to where the objects started, so a scene whose target starts high
-cannot score, and a do-nothing rollout scores nothing.
+cannot score, and a do-nothing rollout achieves nothing.
+
+* pick  — the target rose by at least `lift_margin` and no other object did.
+* push  — the target slid at least `push_margin` along the push direction, never left the table
+          by more than 2 cm, and no object was lifted.
+* place — the carried object (`params.object`) rests inside the target destination's footprint
+          and is not held above it; the destination itself stayed put.
 """
 
 from __future__ import annotations
@@ -11,40 +17,77 @@ from dataclasses import dataclass
 import numpy as np
 
 from gen.spec import EpisodeSpec
+from oracle import catalog
 from oracle.scene import Scene
+
+PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
+PUSH_MARGIN = 0.05
+SLIDE_MAX_RISE = 0.02
+PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """What a rollout did to the scene, measured on its final state."""
+    """Where every object started and ended, and where the end effector finished."""
 
-    rise: dict[str, float]  # object id -> final minus initial height, metres
-    moved: dict[str, float]  # object id -> horizontal displacement, metres
-    ee: tuple[float, float, float]  # final end-effector position
+    start: dict[str, tuple[float, float, float]]
+    end: dict[str, tuple[float, float, float]]
+    ee: tuple[float, float, float]
 
+    def rise(self, object_id: str) -> float:
+        return self.end[object_id][2] - self.start[object_id][2]
 
-def start_positions(scene: Scene, spec: EpisodeSpec) -> dict[str, np.ndarray]:
-    return {o.id: scene.object_pos(o.id) for o in spec.objects}
-
-
-def measure(scene: Scene, spec: EpisodeSpec, start: dict[str, np.ndarray]) -> Outcome:
-    end = {o.id: scene.object_pos(o.id) for o in spec.objects}
-    return Outcome(
-        rise={k: float(end[k][2] - start[k][2]) for k in end},
-        moved={k: float(np.linalg.norm(end[k][:2] - start[k][:2])) for k in end},
-        ee=tuple(float(v) for v in scene.ee_pos()),  # type: ignore[arg-type]
-    )
+    def shift(self, object_id: str) -> np.ndarray:
+        """Horizontal displacement (dx, dy)."""
+        return np.subtract(self.end[object_id][:2], self.start[object_id][:2])
 
 
-def lifted(spec: EpisodeSpec, outcome: Outcome, target: str | None = None) -> bool:
-    """The target rose by at least the margin and no other object did."""
-    target = spec.target if target is None else target
+def _xyz(v: np.ndarray) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def start_positions(scene: Scene, spec: EpisodeSpec) -> dict[str, tuple[float, float, float]]:
+    return {o.id: _xyz(scene.object_pos(o.id)) for o in spec.objects}
+
+
+def measure(scene: Scene, spec: EpisodeSpec, start: dict[str, tuple[float, float, float]]) -> Outcome:
+    return Outcome(start, {o.id: _xyz(scene.object_pos(o.id)) for o in spec.objects}, _xyz(scene.ee_pos()))
+
+
+def lifted(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
     margin = spec.task.lift_margin
-    others = [r for k, r in outcome.rise.items() if k != target]
-    return outcome.rise[target] >= margin and all(r < margin for r in others)
+    return outcome.rise(target) >= margin and all(outcome.rise(k) < margin for k in outcome.end if k != target)
+
+
+def pushed(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
+    along = float(outcome.shift(target) @ np.asarray(PUSH_DIRECTION))
+    no_lift = all(outcome.rise(k) < SLIDE_MAX_RISE for k in outcome.end)
+    return along >= PUSH_MARGIN and no_lift
+
+
+def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
+    carried = spec.task.params["object"]
+    dest = catalog.kind(spec.object(destination).kind)
+    obj = catalog.kind(spec.object(carried).kind)
+    d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
+    inside = bool(np.all(np.abs(o_end[:2] - d_end[:2]) <= dest.inner))
+    dest_top = d_end[2] - dest.bottom + dest.height
+    resting = (o_end[2] - obj.bottom) <= dest_top + PLACE_MAX_HOVER
+    dest_still = float(np.linalg.norm(outcome.shift(destination))) < 0.03
+    return inside and resting and dest_still
+
+
+PREDICATES = {"pick": lifted, "push": pushed, "place": placed}
+
+
+def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:
+    """Did the rollout do `program` to `target` (the episode's ask, or a counterfactual's)?"""
+    try:
+        predicate = PREDICATES[program]
+    except KeyError:
+        raise ValueError(f"no success predicate for program {program!r}; known: {', '.join(PREDICATES)}") from None
+    return predicate(spec, outcome, target)
 
 
 def succeeded(spec: EpisodeSpec, outcome: Outcome) -> bool:
-    if spec.task.program == "pick":
-        return lifted(spec, outcome)
-    raise ValueError(f"no success predicate for program {spec.task.program!r}")
+    return achieved(spec, outcome, *spec.choice())

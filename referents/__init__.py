@@ -1,9 +1,18 @@
 """Referent types: the ways an instruction can name its target.
 
 Each type is one declarative spec (`<type>.yaml`, validated by `referents.base`) and one small
-module (`<type>.py`) with `design(config, balance) -> Design` (the balanced discrete choices of
-one episode) and, unless the type only picks and lifts, `demo(skills, spec)` (the oracle's
-plan). Adding a type means adding those two files; nothing else changes.
+module (`<type>.py`) holding:
+
+* `design(config, balance) -> Design` — the balanced discrete choices of one episode (required);
+* `demo(skills, spec)` — the oracle's plan (default: grasp the target and lift it);
+* `alternatives(config, spec) -> list[Alternative]` — what the instruction chooses among, for
+  the confound audit (default: every object in the scene);
+* `answer(spec) -> str` — which alternative is right (default: the target object);
+* `assets(config)` — the model inventory (default: one body per candidate of a kind, at most
+  `objects_per_scene`);
+* `CONFOUNDS` — the shortcuts `confound=` may re-introduce (default: none).
+
+Adding a type means adding those two files; nothing else changes.
 """
 
 from __future__ import annotations
@@ -14,7 +23,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-from referents.base import Balance, Design, ReferentConfig, ReferentSpecError
+from referents.base import Alternative, Balance, Design, ReferentConfig, ReferentSpecError, object_alternatives
 
 if TYPE_CHECKING:
     from gen.spec import EpisodeSpec
@@ -50,9 +59,25 @@ class Referent:
             skills.grasp(spec.target)
             skills.lift()
 
+    def alternatives(self, spec: EpisodeSpec) -> list[Alternative]:
+        if hasattr(self.module, "alternatives"):
+            return self.module.alternatives(self.config, spec)
+        return object_alternatives(self.config, spec)
+
+    def assets(self) -> tuple[tuple[str, int], ...]:
+        if hasattr(self.module, "assets"):
+            return tuple(sorted(self.module.assets(self.config)))
+        return self.config.assets()
+
+    def answer(self, spec: EpisodeSpec) -> str:
+        return self.module.answer(spec) if hasattr(self.module, "answer") else spec.target
+
 
 def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | None = None) -> Referent:
-    """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path`."""
+    """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path`.
+
+    `overrides` replace top-level spec fields (e.g. objects_per_scene, holdout, confound).
+    """
     if spec_path is None:
         if name not in available():
             raise UnknownReferent(f"unknown referent {name!r}; available: {', '.join(available())}")
@@ -65,6 +90,8 @@ def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | No
     if not (HERE / f"{config.type}.py").is_file():
         raise ReferentSpecError(f"{path}: type: no module referents/{config.type}.py for type {config.type!r}")
     module = importlib.import_module(f"referents.{config.type}")
+    if config.confound and config.confound not in getattr(module, "CONFOUNDS", ()):
+        raise ReferentSpecError(f"{path}: confound: {config.confound!r} is not defined for referent type {config.type!r}")
     if hasattr(module, "validate"):
         module.validate(config)
     return Referent(config, module)

@@ -1,27 +1,35 @@
-"""What every referent type shares: its declarative config, the role balancer, and the design
-it returns for one episode (the discrete choices; poses are realised in gen/plan.py).
+"""What every referent type shares: its declarative config, the role balancer, the design it
+returns for one episode (the discrete choices; poses are realised in gen/plan.py), and the
+helpers most types are built from.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections import Counter
-from collections.abc import Hashable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 import yaml
 
-from gen.spec import Counterfactual, TaskSpec
+from gen.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from oracle import catalog
 from oracle.world import TABLE_SIZE
 
 T = TypeVar("T")
+CONFOUNDS = ("position",)
 
 
 class ReferentSpecError(ValueError):
-    """A referent spec file is malformed; the message names the file and the field."""
+    """A referent spec file (or an option that edits it) is wrong; the message names the field."""
+
+
+def object_key(name: str, attributes: dict[str, str]) -> str:
+    """An object's identity in a referent's vocabulary: its name qualified by its attributes."""
+    return " ".join([*(attributes[k] for k in sorted(attributes)), name])
 
 
 @dataclass(frozen=True)
@@ -31,34 +39,54 @@ class Candidate:
     kind: str
     name: str
     attributes: dict[str, str] = field(default_factory=dict)
+    role: str = ""  # for types whose scenes mix roles, e.g. "destination" vs "object"
+    targetable: bool = True  # False for `distractor_only` values
 
     @property
     def key(self) -> str:
-        """Identity within the referent's vocabulary (the name, qualified by attributes)."""
-        attrs = " ".join(self.attributes[k] for k in sorted(self.attributes))
-        return f"{attrs} {self.name}".strip()
+        return object_key(self.name, self.attributes)
+
+    def word(self, naming: str) -> str:
+        """The value of the naming variable: the name, the whole key, or an attribute."""
+        if naming in ("name", "key"):
+            return self.name if naming == "name" else self.key
+        return self.attributes[naming]
+
+    def matches(self, value: str) -> bool:
+        return value in (self.name, self.key, *self.attributes.values())
 
 
 @dataclass(frozen=True)
 class Layout:
-    """Where objects may stand: slot centres (x, y) on the table, jitter and yaw range."""
+    """Where objects may stand: slot centres (x, y) on the table, jitter, yaw range, and the
+    canonical slot a `confound=position` dataset always puts the target in."""
 
     slots: tuple[tuple[float, float], ...]
     jitter: float = 0.02
     yaw: tuple[float, float] = (-np.pi, np.pi)
+    canonical_slot: int = 0
 
 
 @dataclass(frozen=True)
 class ReferentConfig:
-    """A referent type's declarative spec (referents/<type>.yaml), validated."""
+    """A referent type's declarative spec (referents/<type>.yaml), validated.
+
+    `naming` is the variable the instruction names the target by ("name" or an attribute);
+    `holdout` values never appear, `distractor_only` values never are the target, and
+    `confound` deliberately re-introduces a shortcut (only "position") for comparisons.
+    """
 
     type: str
     path: str
+    naming: str
     objects_per_scene: int
     objects: tuple[Candidate, ...]
     layout: Layout
     templates: tuple[str, ...]
     task: TaskSpec = TaskSpec()
+    holdout: tuple[str, ...] = ()
+    distractor_only: tuple[str, ...] = ()
+    confound: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)  # type-specific fields
 
     @classmethod
@@ -69,7 +97,7 @@ class ReferentConfig:
             raise ReferentSpecError(f"{path}: cannot read referent spec: {exc}") from None
         if not isinstance(data, dict):
             raise ReferentSpecError(f"{path}: a referent spec must be a mapping")
-        data.update(overrides or {})
+        data.update({k: v for k, v in (overrides or {}).items() if v is not None})
         return cls.from_dict(data, str(path))
 
     @classmethod
@@ -78,54 +106,52 @@ class ReferentConfig:
             return ReferentSpecError(f"{path}: {field_name}: {problem}")
 
         data = dict(data)
-        for required in ("type", "objects_per_scene", "objects", "layout", "templates"):
+        for required in ("type", "naming", "objects_per_scene", "objects", "layout", "templates"):
             if required not in data:
                 raise fail(required, "missing field")
-        objects = []
-        for i, o in enumerate(data.pop("objects") or []):
-            if not isinstance(o, dict) or "kind" not in o or "name" not in o:
-                raise fail(f"objects[{i}]", "each object needs 'kind' and 'name'")
-            if o["kind"] not in catalog.KINDS:
-                raise fail(f"objects[{i}].kind", f"unknown kind {o['kind']!r}; known: {', '.join(sorted(catalog.KINDS))}")
-            attrs = {str(k): str(v) for k, v in (o.get("attributes") or {}).items()}
-            if "color" in attrs and attrs["color"] not in catalog.COLORS:
-                raise fail(f"objects[{i}].attributes.color", f"unknown color {attrs['color']!r}; known: {', '.join(catalog.COLORS)}")
-            objects.append(Candidate(str(o["kind"]), str(o["name"]), attrs))
+        objects = _candidates(data.pop("objects"), fail)
+        naming = str(data.pop("naming"))
         if len({c.key for c in objects}) != len(objects):
             raise fail("objects", "two objects share the same name and attributes")
-        layout_data = data.pop("layout")
-        if not isinstance(layout_data, dict) or "slots" not in layout_data:
-            raise fail("layout.slots", "missing field")
-        try:
-            slots = tuple((float(x), float(y)) for x, y in layout_data["slots"])
-            layout = Layout(slots, float(layout_data.get("jitter", 0.02)), tuple(layout_data.get("yaw", (-np.pi, np.pi))))  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            raise fail("layout", "slots must be [x, y] pairs and jitter a number") from None
-        half_x, half_y = TABLE_SIZE[0] / 2 - 0.05, TABLE_SIZE[1] / 2 - 0.05
-        for i, (x, y) in enumerate(layout.slots):
-            if abs(x) > half_x or abs(y) > half_y:
-                raise fail(f"layout.slots[{i}]", f"({x}, {y}) is off the table (|x| <= {half_x}, |y| <= {half_y})")
+        vocabulary: dict[str, tuple[str, ...]] = {}
+        for option in ("holdout", "distractor_only"):
+            values = tuple(str(v) for v in (data.pop(option, None) or ()))
+            for v in values:
+                if not any(c.matches(v) for c in objects):
+                    raise fail(option, f"{v!r} names no object of this referent")
+            vocabulary[option] = values
+        objects = [c for c in objects if not any(c.matches(v) for v in vocabulary["holdout"])]
+        objects = [replace(c, targetable=not any(c.matches(v) for v in vocabulary["distractor_only"])) for c in objects]
+        layout = _layout(data.pop("layout"), fail)
         k = data.pop("objects_per_scene")
         if not isinstance(k, int) or k < 1:
             raise fail("objects_per_scene", f"must be a positive integer, got {k!r}")
         if k > len(layout.slots):
             raise fail("objects_per_scene", f"{k} objects cannot fit in the {len(layout.slots)} slots of layout.slots")
+        if not any(c.targetable for c in objects):
+            raise fail("distractor_only", "leaves no object that can be the target")
         templates = tuple(str(t) for t in data.pop("templates") or [])
         if not templates:
             raise fail("templates", "needs at least one instruction template")
-        task = data.pop("task", None) or {}
         try:
-            task_spec = TaskSpec(**task)
+            task = TaskSpec(**(data.pop("task", None) or {}))
         except TypeError as exc:
             raise fail("task", str(exc)) from None
+        confound = data.pop("confound", None)
+        if confound is not None and confound not in CONFOUNDS:
+            raise fail("confound", f"unknown confound {confound!r}; known: {', '.join(CONFOUNDS)}")
         return cls(
             type=str(data.pop("type")),
             path=path,
+            naming=naming,
             objects_per_scene=k,
             objects=tuple(objects),
             layout=layout,
             templates=templates,
-            task=task_spec,
+            task=task,
+            holdout=vocabulary["holdout"],
+            distractor_only=vocabulary["distractor_only"],
+            confound=confound,
             extra=data,
         )
 
@@ -133,6 +159,61 @@ class ReferentConfig:
         """The model inventory: enough bodies of each kind for any scene of this referent."""
         per_kind = Counter(c.kind for c in self.objects)
         return tuple(sorted((kind, min(n, self.objects_per_scene)) for kind, n in per_kind.items()))
+
+    def role(self, role: str) -> list[Candidate]:
+        return [c for c in self.objects if c.role == role]
+
+    def need(self, key: str, kind: type = object) -> Any:
+        """A type-specific field of the spec, required."""
+        if key not in self.extra:
+            raise ReferentSpecError(f"{self.path}: {key}: missing field (required by referent type {self.type})")
+        value = self.extra[key]
+        if kind is not object and not isinstance(value, kind):
+            raise ReferentSpecError(f"{self.path}: {key}: expected a {kind.__name__}, got {value!r}")
+        return value
+
+    def fail(self, field_name: str, problem: str) -> ReferentSpecError:
+        return ReferentSpecError(f"{self.path}: {field_name}: {problem}")
+
+
+def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> list[Candidate]:
+    """Objects, where a list-valued attribute expands into one candidate per value."""
+    if not isinstance(raw, list) or not raw:
+        raise fail("objects", "must be a non-empty list")
+    out = []
+    for i, o in enumerate(raw):
+        if not isinstance(o, dict) or "kind" not in o or "name" not in o:
+            raise fail(f"objects[{i}]", "each object needs 'kind' and 'name'")
+        if o["kind"] not in catalog.KINDS:
+            raise fail(f"objects[{i}].kind", f"unknown kind {o['kind']!r}; known: {', '.join(sorted(catalog.KINDS))}")
+        attrs = o.get("attributes") or {}
+        if not isinstance(attrs, dict):
+            raise fail(f"objects[{i}].attributes", "must be a mapping")
+        options = {str(k): [str(x) for x in (v if isinstance(v, list) else [v])] for k, v in attrs.items()}
+        for color in options.get("color", []):
+            if color not in catalog.COLORS:
+                raise fail(f"objects[{i}].attributes.color", f"unknown color {color!r}; known: {', '.join(catalog.COLORS)}")
+        for combo in itertools.product(*options.values()):
+            out.append(Candidate(str(o["kind"]), str(o["name"]), dict(zip(options, combo)), str(o.get("role", ""))))
+    return out
+
+
+def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> Layout:
+    if not isinstance(raw, dict) or "slots" not in raw:
+        raise fail("layout.slots", "missing field")
+    try:
+        slots = tuple((float(x), float(y)) for x, y in raw["slots"])
+        yaw = tuple(float(v) for v in raw.get("yaw", (-np.pi, np.pi)))
+        layout = Layout(slots, float(raw.get("jitter", 0.02)), yaw, int(raw.get("canonical_slot", 0)))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise fail("layout", "slots must be [x, y] pairs, jitter a number, yaw [min, max]") from None
+    half_x, half_y = TABLE_SIZE[0] / 2 - 0.05, TABLE_SIZE[1] / 2 - 0.05
+    for i, (x, y) in enumerate(layout.slots):
+        if abs(x) > half_x or abs(y) > half_y:
+            raise fail(f"layout.slots[{i}]", f"({x}, {y}) is off the table (|x| <= {half_x}, |y| <= {half_y})")
+    if not 0 <= layout.canonical_slot < len(slots):
+        raise fail("layout.canonical_slot", f"must index layout.slots (0..{len(slots) - 1})")
+    return layout
 
 
 @dataclass(frozen=True)
@@ -153,6 +234,18 @@ class Design:
     template: str
     instruction: str
     counterfactuals: tuple[Counterfactual, ...]
+    task: TaskSpec | None = None  # None: the referent's task
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """One of the things an instruction could ask for in a scene, as the confound audit sees it:
+    `value` is what the instruction would call it, `features` are non-instruction variables."""
+
+    id: str
+    value: str
+    slot: int
+    features: dict[str, Hashable]
 
 
 class Balance:
@@ -188,5 +281,133 @@ class Balance:
         return option.key if isinstance(option, Candidate) else option
 
 
-def fill(template: str, **words: str) -> str:
-    return template.format(**words)
+def fill(template: str, candidate: Candidate, **words: str) -> str:
+    """A template filled with the candidate's name and attributes (and any extra words)."""
+    return template.format(name=candidate.name, **candidate.attributes, **words)
+
+
+def slug(text: str) -> str:
+    return text.replace(" ", "_")
+
+
+def target_slot(cfg: ReferentConfig, balance: Balance, key: Hashable, options: Sequence[int]) -> int:
+    """The target's slot: least used for `key`, or always the canonical one under confound=position."""
+    if cfg.confound == "position":
+        if cfg.layout.canonical_slot not in options:
+            raise ValueError("the canonical slot is not free")
+        return cfg.layout.canonical_slot
+    return balance.pick(("target_slot", key), list(options), also="slot")
+
+
+def choose_scene(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate], naming: str) -> list[Placement]:
+    """A target and `objects_per_scene - 1` distractors that each differ from every other in
+    the naming variable; the target comes first.
+
+    The target value is the least-used one, its instance the least-used of that value, at its
+    least-used slot; distractor values are the least-used as distractors, each instance at its
+    least-used free slot.
+    """
+    for c in pool:
+        if naming not in ("name", "key") and naming not in c.attributes:
+            raise cfg.fail("objects", f"{c.key!r} has no {naming!r} attribute, which names targets (naming: {naming})")
+    targets = [c for c in pool if c.targetable]
+    value = balance.pick("target", list(dict.fromkeys(c.word(naming) for c in targets)))
+    target = balance.pick(("instance", value), [c for c in targets if c.word(naming) == value])
+    slots = list(range(len(cfg.layout.slots)))
+    placements = [Placement(slug(target.key), target, target_slot(cfg, balance, target.key, slots))]
+    others = list(dict.fromkeys(c.word(naming) for c in pool if c.word(naming) != value))
+    if len(others) < cfg.objects_per_scene - 1:
+        raise cfg.fail("objects", f"needs {cfg.objects_per_scene} different {naming} values per scene, has {len(others) + 1}")
+    for _ in range(cfg.objects_per_scene - 1):
+        other = balance.pick("distractor", others)
+        others.remove(other)
+        d = balance.pick(("distractor_instance", other), [c for c in pool if c.word(naming) == other])
+        free = [s for s in slots if s not in {p.slot for p in placements}]
+        placements.append(Placement(slug(d.key), d, balance.pick(("distractor_slot", d.key), free, also="slot")))
+    return placements
+
+
+def naming_design(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate] | None = None) -> Design:
+    """One target named by a single word (its name, or an attribute) among distractors that
+    each have another value of it; the swap counterfactual names each distractor instead."""
+    placements = choose_scene(cfg, balance, cfg.objects if pool is None else pool, cfg.naming)
+    target = placements[0].candidate
+    template = balance.pick("template", cfg.templates)
+    return Design(
+        placements=tuple(sorted(placements, key=lambda p: p.slot)),
+        target=placements[0].id,
+        template=template,
+        instruction=fill(template, target),
+        counterfactuals=tuple(
+            Counterfactual(fill(template, p.candidate), p.id, (target.word(cfg.naming), p.candidate.word(cfg.naming)))
+            for p in placements[1:]
+        ),
+    )
+
+
+def object_features(spec: EpisodeSpec, obj: SceneObject) -> dict[str, Hashable]:
+    """Non-instruction variables of one object, for the confound audit."""
+    features: dict[str, Hashable] = {
+        "slot": obj.slot,
+        "x bin (5 cm)": int(np.floor(obj.pos[0] / 0.05)),
+        "y bin (5 cm)": int(np.floor(obj.pos[1] / 0.05)),
+        "identity": object_key(obj.name, obj.attributes),
+        "kind": obj.kind,
+        "composition": (tuple(sorted(object_key(o.name, o.attributes) for o in spec.objects)), object_key(obj.name, obj.attributes)),
+    }
+    for attr, value in obj.attributes.items():
+        features[f"{attr} at slot"] = (value, obj.slot)
+    return features
+
+
+def object_alternatives(
+    cfg: ReferentConfig, spec: EpisodeSpec, ids: Sequence[str] | None = None,
+    extra: Callable[[SceneObject], dict[str, Hashable]] | None = None,
+) -> list[Alternative]:
+    """Objects as alternatives (all of the scene's, or `ids`), valued by the naming variable."""
+    chosen = [spec.object(i) for i in ids] if ids is not None else list(spec.objects)
+    out = []
+    for o in chosen:
+        key = object_key(o.name, o.attributes)
+        value = {"name": o.name, "key": key}.get(cfg.naming) or o.attributes.get(cfg.naming, key)
+        features = object_features(spec, o) | (extra(o) if extra else {})
+        out.append(Alternative(o.id, value, o.slot, features))
+    return out
+
+
+@dataclass(frozen=True)
+class Crossed:
+    """Four objects crossing two values of an axis with two colors; `objects[(axis, color)]`."""
+
+    placements: tuple[Placement, ...]
+    objects: dict[tuple[str, str], Placement]
+    axis: tuple[str, str]  # (target's value, the other)
+    color: tuple[str, str]  # (target's color, the other)
+
+    @property
+    def target(self) -> Placement:
+        return self.objects[(self.axis[0], self.color[0])]
+
+
+def crossed_scene(cfg: ReferentConfig, balance: Balance, axis: str) -> Crossed:
+    """Two values of `axis` (e.g. shape or size) x two colors: every object shares one attribute
+    with two others, so no single word picks the target. The target is the least-used object;
+    the other axis value and the other color are the least used alongside it; slots as usual."""
+    table = {(c.word(axis), c.attributes.get("color", "")): c for c in cfg.objects}
+    axis_values = list(dict.fromkeys(a for a, _ in table))
+    colors = list(dict.fromkeys(col for _, col in table))
+    if len(axis_values) < 2 or len(colors) < 2 or len(table) != len(axis_values) * len(colors):
+        raise cfg.fail("objects", f"needs every {axis} in the same two or more colors")
+    target = balance.pick("target", [c for c in cfg.objects if c.targetable])
+    a_target, c_target = target.word(axis), target.attributes["color"]
+    a_other = balance.pick(("other", axis, a_target), [a for a in axis_values if a != a_target])
+    c_other = balance.pick(("other color", c_target), [col for col in colors if col != c_target])
+    slots = list(range(len(cfg.layout.slots)))
+    cells = [(a_target, c_target), (a_other, c_target), (a_target, c_other), (a_other, c_other)]
+    objects: dict[tuple[str, str], Placement] = {}
+    for i, cell in enumerate(cells):
+        cand = table[cell]
+        free = [s for s in slots if s not in {p.slot for p in objects.values()}]
+        slot = target_slot(cfg, balance, cand.key, free) if i == 0 else balance.pick(("distractor_slot", cand.key), free, also="slot")
+        objects[cell] = Placement(slug(cand.key), cand, slot)
+    return Crossed(tuple(sorted(objects.values(), key=lambda p: p.slot)), objects, (a_target, a_other), (c_target, c_other))

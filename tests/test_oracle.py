@@ -25,7 +25,7 @@ from oracle.success import lifted, succeeded
 
 @pytest.fixture(scope="module")
 def scene() -> Scene:
-    return scene_for(referents.load("object").config.assets())
+    return scene_for(referents.load("object").assets())
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def test_demos_succeed(scene: Scene, ik: ArmIK) -> None:
         demo = demonstrate(scene, ik, realize(ref, d, i, 21, sim), ref.demo)
         ok += demo.success
         if demo.success:
-            assert lifted(demo.spec, demo.outcome)
+            assert lifted(demo.spec, demo.outcome, demo.spec.target)
     assert ok >= 7, f"only {ok}/8 first-attempt demos succeeded"
 
 
@@ -65,7 +65,7 @@ def test_do_nothing_never_succeeds(scene: Scene) -> None:
     for spec in plan(referents.load("object"), 4, seed=8, sim=SimSettings()):
         outcome = replay(scene, spec, _hold_home(spec))
         assert not succeeded(spec, outcome)
-        assert abs(outcome.rise[spec.target]) < 0.005
+        assert abs(outcome.rise(spec.target)) < 0.005
 
 
 def test_a_target_that_starts_high_does_not_pass(scene: Scene) -> None:
@@ -86,7 +86,7 @@ def test_grasping_the_wrong_object_fails(scene: Scene, ik: ArmIK) -> None:
         skills.lift()
 
     demo = demonstrate(scene, ik, spec, wrong)
-    assert demo.outcome is not None and demo.outcome.rise[decoy] > 0.05
+    assert demo.outcome is not None and demo.outcome.rise(decoy) > 0.05
     assert not demo.success
 
 
@@ -125,7 +125,7 @@ def test_producer_records_what_it_verified() -> None:
     ep = produced.episode
     assert ep.states.shape == (ep.length, 16) and ep.actions.shape == (ep.length, 8)
     assert set(ep.videos) == {"agentview", "wrist"}
-    assert produced.outcome.rise[produced.spec.target] >= 0.05
+    assert produced.outcome.rise(produced.spec.target) >= 0.05
     # the first recorded state is the robot at home
     np.testing.assert_allclose(ep.states[0, :7], sim.robot_home, atol=1e-6)
-    producer.cameras.close()
+    producer.close()

@@ -17,7 +17,7 @@ from oracle.world import CAMERAS, TABLE_TOP_Z
 
 @pytest.fixture(scope="module")
 def scene() -> Scene:
-    return scene_for(referents.load("object").config.assets())
+    return scene_for(referents.load("object").assets())
 
 
 def _extent(model: mujoco.MjModel, data: mujoco.MjData, body_id: int) -> tuple[np.ndarray, np.ndarray]:
@@ -30,7 +30,13 @@ def _extent(model: mujoco.MjModel, data: mujoco.MjData, body_id: int) -> tuple[n
             start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
             verts = model.mesh_vert[start : start + count]
         else:
-            verts = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * model.geom_size[g]
+            size = model.geom_size[g]
+            half = {
+                mujoco.mjtGeom.mjGEOM_BOX: size,
+                mujoco.mjtGeom.mjGEOM_CYLINDER: (size[0], size[0], size[1]),
+                mujoco.mjtGeom.mjGEOM_SPHERE: (size[0],) * 3,
+            }[model.geom_type[g]]
+            verts = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
         points.append(verts @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g])
     pts = np.concatenate(points)
     return pts.min(axis=0), pts.max(axis=0)

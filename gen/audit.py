@@ -1,0 +1,121 @@
+"""The confound audit: does anything but the instruction predict the target?
+
+Computed from episode specs alone (no simulation). For every non-instruction variable a
+referent exposes (slot, position bins, identity, composition, rank, side, ...), a predictor
+learns on 4/5 of the episodes how often an alternative with each value of the variable was the
+answer, and on the held-out fifth picks the alternative whose value scored best (ties share the
+credit). Its held-out accuracy, with a Wilson 95% interval, is compared with chance (one over
+the number of alternatives). A variable leaks when the interval's lower end exceeds chance by
+more than LEAK_MARGIN.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+
+import pandas as pd
+
+from gen.rates import Rate
+from gen.spec import EpisodeSpec
+from referents import Referent
+
+FOLDS = 5
+LEAK_MARGIN = 0.05
+AUDIT_VERSION = 1
+POSITION_WORDS = ("slot", "bin", "rank", "side", "row")
+IDENTITY_WORDS = ("identity", "kind", "composition", "at slot", "object")
+
+
+def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> pd.DataFrame:
+    rows = []
+    for i, spec in enumerate(specs):
+        answer = referent.answer(spec)
+        for alt in referent.alternatives(spec):
+            for var, value in alt.features.items():
+                rows.append((i, i % FOLDS, alt.id, var, repr(value), alt.id == answer))
+    return pd.DataFrame(rows, columns=["episode", "fold", "alt", "variable", "value", "answer"])
+
+
+def _held_out_hits(df: pd.DataFrame) -> float:
+    """Expected number of held-out episodes whose answer a value->rate predictor picks."""
+    hits = 0.0
+    prior = df["answer"].mean()
+    for fold in range(FOLDS):
+        train, test = df[df.fold != fold], df[df.fold == fold]
+        if test.empty:
+            continue
+        stats = train.groupby("value")["answer"].agg(["sum", "count"])
+        score = ((stats["sum"] + prior) / (stats["count"] + 1)).rename("score")
+        scored = test.join(score, on="value")
+        scored["score"] = scored["score"].fillna(prior)
+        best = scored.groupby("episode")["score"].transform("max")
+        top = scored[scored.score >= best - 1e-12]
+        per_episode = top.groupby("episode")["answer"].agg(["sum", "count"])
+        hits += float((per_episode["sum"] / per_episode["count"]).sum())
+    return hits
+
+
+def expected_leaks(referent: Referent) -> tuple[str, ...]:
+    """Word families of variables that are meant to leak because the user asked for it."""
+    words: tuple[str, ...] = ()
+    if referent.config.confound == "position":
+        words += POSITION_WORDS
+    if referent.config.distractor_only:
+        words += IDENTITY_WORDS
+    return words
+
+
+def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
+    """The audit as JSON-ready data; see module docstring."""
+    n = len(specs)
+    df = _table(referent, specs)
+    per_episode = df.drop_duplicates(["episode", "alt"]).groupby("episode").size()
+    chance = float((1.0 / per_episode).mean())
+    expected_words = expected_leaks(referent)
+    variables = []
+    for var, sub in df.groupby("variable", sort=True):
+        rate = Rate(_held_out_hits(sub), n)
+        leak = rate.ci[0] > chance + LEAK_MARGIN
+        variables.append(
+            {
+                "variable": var,
+                **rate.to_dict(),
+                "chance": round(chance, 4),
+                "leak": leak,
+                "expected": leak and any(w in var for w in expected_words),
+            }
+        )
+    leaks = [v["variable"] for v in variables if v["leak"]]
+    unexpected = [v["variable"] for v in variables if v["leak"] and not v["expected"]]
+    return {
+        "version": AUDIT_VERSION,
+        "referent": referent.name,
+        "episodes": n,
+        "chance": round(chance, 4),
+        "method": f"{FOLDS}-fold held-out accuracy of a value->answer-rate predictor per variable; "
+        f"leak when the Wilson 95% lower bound exceeds chance + {LEAK_MARGIN}",
+        "variables": variables,
+        "balance": role_balance(referent, specs),
+        "vocabulary": {"holdout": list(referent.config.holdout), "distractor_only": list(referent.config.distractor_only)},
+        "confound": referent.config.confound,
+        "leaks": leaks,
+        "unexpected_leaks": unexpected,
+        "verdict": "no leak" if not leaks else f"leak: {', '.join(leaks)}",
+    }
+
+
+def role_balance(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict[str, dict[str, dict[str, int]]]:
+    """value -> role (target / distractor) -> slot -> count."""
+    table: dict[str, dict[str, dict[str, int]]] = defaultdict(lambda: {"target": {}, "distractor": {}})
+    for spec in specs:
+        answer = referent.answer(spec)
+        for alt in referent.alternatives(spec):
+            cell = table[alt.value]["target" if alt.id == answer else "distractor"]
+            cell[str(alt.slot)] = cell.get(str(alt.slot), 0) + 1
+    return {value: {role: dict(sorted(c.items(), key=lambda kv: int(kv[0]))) for role, c in roles.items()} for value, roles in sorted(table.items())}
+
+
+def agree(planned: dict, written: dict) -> bool:
+    """Resampled demos keep roles, so the two audits must reach the same verdict and balance."""
+    return planned["leaks"] == written["leaks"] and planned["balance"] == written["balance"]

@@ -1,0 +1,62 @@
+"""Verb referent: the verb names the motor program; the object is named too.
+
+Objects and slots are balanced as in the object referent; the program is balanced per object.
+The swap counterfactual changes the verb on the same object. The alternatives the audit sees
+are the programs, with object- and position-dependent variables attached to each.
+"""
+
+from __future__ import annotations
+
+from gen.spec import Counterfactual, EpisodeSpec, TaskSpec
+from oracle.skills import Skills
+from referents.base import Alternative, Balance, Design, ReferentConfig, choose_scene, object_features
+
+
+def validate(cfg: ReferentConfig) -> None:
+    verbs = cfg.need("verbs", dict)
+    unknown = set(verbs) - {"pick", "push"}
+    if len(verbs) < 2 or unknown:
+        raise cfg.fail("verbs", f"needs two or more of the programs pick, push; unknown: {sorted(unknown)}")
+
+
+def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    placements = choose_scene(cfg, balance, cfg.objects, "name")
+    target = placements[0]
+    verbs: dict[str, str] = cfg.extra["verbs"]
+    program = balance.pick(("program", target.candidate.key), list(verbs), also="program")
+    template = balance.pick("template", cfg.templates)
+
+    def say(p: str) -> str:
+        return template.format(verb=verbs[p], name=target.candidate.name)
+
+    return Design(
+        placements=tuple(sorted(placements, key=lambda p: p.slot)),
+        target=target.id,
+        template=template,
+        instruction=say(program),
+        counterfactuals=tuple(
+            Counterfactual(say(p), target.id, (verbs[program], verbs[p]), program=p) for p in verbs if p != program
+        ),
+        task=TaskSpec(program=program, lift_margin=cfg.task.lift_margin),
+    )
+
+
+def demo(skills: Skills, spec: EpisodeSpec) -> None:
+    if spec.task.program == "push":
+        skills.push(spec.target)
+    else:
+        skills.grasp(spec.target)
+        skills.lift()
+
+
+def answer(spec: EpisodeSpec) -> str:
+    return spec.task.program
+
+
+def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
+    obj = spec.object(spec.target)
+    base = object_features(spec, obj)
+    return [
+        Alternative(p, verb, obj.slot, {"program": p, **{f"{k} and program": (v, p) for k, v in base.items()}})
+        for p, verb in cfg.extra["verbs"].items()
+    ]

@@ -1,0 +1,129 @@
+"""Every referent type: balanced roles, counterfactuals that name something else, objects in
+view, success that a do-nothing rollout cannot reach, and a clean confound audit."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import mujoco
+import numpy as np
+import pytest
+
+import referents
+from gen.audit import audit
+from gen.plan import plan
+from gen.spec import EpisodeSpec, SimSettings
+from oracle.episode import replay
+from oracle.scene import scene_for
+from oracle.success import succeeded
+from oracle.world import CAMERAS
+
+TYPES = referents.available()
+
+
+def test_all_nine_types_exist() -> None:
+    assert set(TYPES) == {"object", "color", "category", "ordinal", "relation", "negation", "composition", "goal", "verb"}
+
+
+@pytest.fixture(scope="module", params=TYPES)
+def planned(request: pytest.FixtureRequest) -> tuple[referents.Referent, list[EpisodeSpec]]:
+    ref = referents.load(request.param)
+    return ref, plan(ref, 300, seed=1, sim=SimSettings())
+
+
+def test_every_value_is_target_and_distractor_across_slots(planned: tuple) -> None:
+    ref, specs = planned
+    table = audit(ref, specs)["balance"]
+    assert len(table) >= 2
+    for value, roles in table.items():
+        assert sum(roles["target"].values()) > 0, f"{value} is never the target"
+        assert sum(roles["distractor"].values()) > 0, f"{value} is never a distractor"
+        assert len(roles["target"]) >= 2, f"{value} is the target in only one slot"
+    # within scenes of one size, every value is the answer about equally often
+    by_size: dict[int, Counter] = {}
+    for s in specs:
+        alts = ref.alternatives(s)
+        answer = next(a.value for a in alts if a.id == ref.answer(s))
+        by_size.setdefault(len(alts), Counter())[answer] += 1
+    for counts in by_size.values():
+        assert max(counts.values()) - min(counts.values()) <= 2, counts
+
+
+def test_audit_finds_no_leak(planned: tuple) -> None:
+    ref, specs = planned
+    report = audit(ref, specs)
+    assert report["verdict"] == "no leak", [v for v in report["variables"] if v["leak"]]
+    assert {"slot", "identity"} <= {v["variable"].split(" and ")[0] for v in report["variables"]}
+
+
+def test_counterfactuals_ask_for_something_else_in_the_scene(planned: tuple) -> None:
+    _, specs = planned
+    for s in specs:
+        ids = {o.id for o in s.objects}
+        assert s.target in ids and s.counterfactuals
+        choices = {s.choice(c) for c in s.counterfactuals}
+        assert s.choice() not in choices
+        for c in s.counterfactuals:
+            assert c.target in ids and c.instruction != s.instruction
+            assert c.changed[0] != c.changed[1]
+
+
+def _visible(scene, camera: str) -> dict[int, int]:
+    renderer = mujoco.Renderer(scene.model, 128, 128)
+    renderer.enable_segmentation_rendering()
+    option = mujoco.MjvOption()
+    option.geomgroup[0] = False
+    renderer.update_scene(scene.data, camera=CAMERAS[camera], scene_option=option)
+    seg = renderer.render()
+    renderer.close()
+    geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
+    bodies, counts = np.unique(scene.model.geom_bodyid[geoms], return_counts=True)
+    return dict(zip(bodies.tolist(), counts.tolist()))
+
+
+@pytest.mark.parametrize("name", TYPES)
+def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
+    ref = referents.load(name)
+    scene = scene_for(ref.assets())
+    for spec in plan(ref, 3, seed=4, sim=SimSettings()):
+        scene.reset(spec)
+        visible = _visible(scene, "agentview")
+        for obj in spec.objects:
+            assert visible.get(scene.placed[obj.id].body_id, 0) >= 8, f"{name}: {obj.id} not visible"
+        still = np.tile(np.array([*spec.sim.robot_home, -1.0], np.float32), (30, 1))
+        outcome = replay(scene, spec, still)
+        assert not succeeded(spec, outcome)
+        for cf in spec.counterfactuals:
+            assert not succeeded(spec, outcome) and not _achieved(spec, outcome, cf)
+
+
+def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
+    from oracle.success import achieved
+
+    return achieved(spec, outcome, *spec.choice(cf))
+
+
+def test_position_confound_is_flagged() -> None:
+    ref = referents.load("object", overrides={"confound": "position"})
+    specs = plan(ref, 200, seed=0, sim=SimSettings())
+    assert {s.object(s.target).slot for s in specs} == {ref.config.layout.canonical_slot}
+    report = audit(ref, specs)
+    assert "slot" in report["leaks"] and report["verdict"].startswith("leak: ")
+    assert not report["unexpected_leaks"]
+
+
+def test_holdout_and_distractor_only() -> None:
+    ref = referents.load("color", overrides={"holdout": ["purple"], "distractor_only": ["orange"]})
+    specs = plan(ref, 120, seed=0, sim=SimSettings())
+    colors = Counter(o.attributes["color"] for s in specs for o in s.objects)
+    targets = Counter(s.object(s.target).attributes["color"] for s in specs)
+    assert "purple" not in colors
+    assert colors["orange"] > 0 and targets["orange"] == 0
+    report = audit(ref, specs)
+    assert report["vocabulary"] == {"holdout": ["purple"], "distractor_only": ["orange"]}
+    assert not report["unexpected_leaks"]
+
+
+def test_unsupported_confound_is_refused() -> None:
+    with pytest.raises(ValueError, match="confound"):
+        referents.load("ordinal", overrides={"confound": "position"})
