@@ -28,6 +28,8 @@ demo: $(STAMP)
 	$(BIN)/python -m gen referent=object n=20 out=datasets/object overwrite=true
 
 test: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)

@@ -17,12 +17,12 @@ from pathlib import Path
 from typing import Any
 
 import gen.produce as produce
+import referents
 from gen.lerobot_writer import Layout, LeRobotWriter
 from gen.plan import designs
 from gen.spec import SimSettings
 from oracle.render import Cameras
-from oracle.scene import ACTION_NAMES, STATE_NAMES
-import referents
+from oracle.world import ACTION_NAMES, STATE_NAMES
 
 CLOCKS: dict[str, float] = {"render": 0.0, "encode": 0.0}
 

@@ -61,7 +61,7 @@ def expected_leaks(referent: Referent) -> tuple[str, ...]:
     words: tuple[str, ...] = ()
     if referent.config.confound == "position":
         words += POSITION_WORDS
-    if referent.config.distractor_only:
+    if referent.config.distractor_only or referent.config.targets:
         words += IDENTITY_WORDS
     return words
 
@@ -97,7 +97,11 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
         f"leak when the Wilson 95% lower bound exceeds chance + {LEAK_MARGIN}",
         "variables": variables,
         "balance": role_balance(referent, specs),
-        "vocabulary": {"holdout": list(referent.config.holdout), "distractor_only": list(referent.config.distractor_only)},
+        "vocabulary": {
+            "holdout": list(referent.config.holdout),
+            "distractor_only": list(referent.config.distractor_only),
+            "targets": list(referent.config.targets),
+        },
         "confound": referent.config.confound,
         "leaks": leaks,
         "unexpected_leaks": unexpected,
@@ -113,7 +117,10 @@ def role_balance(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict[str, 
         for alt in referent.alternatives(spec):
             cell = table[alt.value]["target" if alt.id == answer else "distractor"]
             cell[str(alt.slot)] = cell.get(str(alt.slot), 0) + 1
-    return {value: {role: dict(sorted(c.items(), key=lambda kv: int(kv[0]))) for role, c in roles.items()} for value, roles in sorted(table.items())}
+    return {
+        value: {role: dict(sorted(c.items(), key=lambda kv: int(kv[0]))) for role, c in roles.items()}
+        for value, roles in sorted(table.items())
+    }
 
 
 def agree(planned: dict, written: dict) -> bool:

@@ -30,11 +30,11 @@ configs:
 def command(cfg: GenConfig) -> str:
     """The `python -m gen ...` line that regenerates a dataset made with `cfg`."""
     parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
-    for name in ("codec", "spec", "objects_per_scene", "confound"):
+    for name in ("codec", "spec", "objects_per_scene", "confound", "split"):
         value = getattr(cfg, name)
         if value is not None and value != GenConfig.__dataclass_fields__[name].default:
             parts.append(f"{name}={value}")
-    for name in ("holdout", "distractor_only"):
+    for name in ("holdout", "distractor_only", "targets"):
         if getattr(cfg, name):
             parts.append(f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'")
     if cfg.plan_only:
@@ -52,7 +52,10 @@ def audit_tables(report: dict) -> str:
     ]
     for v in report["variables"]:
         flag = ("yes (requested)" if v["expected"] else "**YES**") if v["leak"] else "no"
-        lines.append(f"| {v['variable']} | {v['rate']:.1%} ({v['k']}/{v['n']}) | {v['ci'][0]:.1%}–{v['ci'][1]:.1%} | {v['chance']:.0%} | {flag} |")
+        lines.append(
+            f"| {v['variable']} | {v['rate']:.1%} ({v['k']}/{v['n']}) "
+            f"| {v['ci'][0]:.1%}–{v['ci'][1]:.1%} | {v['chance']:.0%} | {flag} |"
+        )
     lines += ["", "| value | as target | as distractor | slots as target | slots as distractor |", "|---|---|---|---|---|"]
     for value, roles in report["balance"].items():
         t, d = roles["target"], roles["distractor"]
@@ -65,13 +68,17 @@ def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, repo
     objects = "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
     templates = "\n".join(f"- `{t}`" for t in rc.templates)
     vocabulary = ""
-    if rc.holdout or rc.distractor_only:
+    if rc.holdout or rc.distractor_only or rc.targets:
         vocabulary = (
             f"\nVocabulary control: held out entirely: {', '.join(rc.holdout) or 'none'}; "
-            f"distractor only (never the target): {', '.join(rc.distractor_only) or 'none'}.\n"
+            f"distractor only (never the target): {', '.join(rc.distractor_only) or 'none'}; "
+            f"only these may be the target: {', '.join(rc.targets) or 'all'}.\n"
         )
     if rc.confound:
-        vocabulary += f"\n**Deliberately confounded (`confound={rc.confound}`)**: made to reproduce instruction blindness, not to train on.\n"
+        vocabulary += (
+            f"\n**Deliberately confounded (`confound={rc.confound}`)**: "
+            "made to reproduce instruction blindness, not to train on.\n"
+        )
     contents = (
         f"A plan of {summary.episodes} episodes (`plan_only=true`: scene records and audit only, nothing simulated)."
         if summary.plan_only
@@ -80,7 +87,9 @@ def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, repo
         f"`observation.state`, `action`). Oracle success before retries: "
         f"{summary.episodes}/{summary.episodes + summary.failed_attempts}."
     )
-    text = FRONT_MATTER.format(referent=referent.name) + f"""
+    text = (
+        FRONT_MATTER.format(referent=referent.name)
+        + f"""
 # Deconfounded `{referent.name}` dataset
 
 {contents}
@@ -110,4 +119,43 @@ confound audit is in `meta/audit.json`.
 {command(cfg)}
 ```
 """
+    )
+    (root / "README.md").write_text(text)
+
+
+def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
+    """The exam's card: what it tests, its faces, how to take it, and its plan's audit."""
+    from gen.exam import FACES
+
+    faces = "\n".join(f"| `{name}` | {text} |" for name, text in FACES.items())
+    text = (
+        FRONT_MATTER.format(referent=referent.name).replace("  data_files: data/*/*.parquet", "  data_files: trials.parquet")
+        + f"""
+# Counterfactual exam: `{referent.name}`
+
+{summary.episodes} oracle-solvable trials on the held-out `exam` random stream (scene hashes never
+occur in a training split). Each trial holds the pixels, scene and robot pose fixed and changes
+one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit)
+and `trials.parquet` (one row per rollout); the format is documented in `exam.json` and in the
+generator's `gen/exam.py`.
+
+| face | meaning |
+|---|---|
+{faces}
+
+Take it in our simulator: `python -m eval policy=<oracle|position|nothing|random|remote:HOST:PORT|ckpt:PATH> exam=<this folder>`;
+or in your own code, with `gymnasium.make("deconfound/Exam-v0", exam=..., row=i)` and score your
+logs with `python -m eval.score exam=<this folder> logs=<rollouts.parquet>`.
+
+## Confound audit of the plan
+
+{audit_tables(report)}
+
+## Regenerate
+
+```
+{command(cfg)}
+```
+"""
+    )
     (root / "README.md").write_text(text)

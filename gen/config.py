@@ -42,6 +42,8 @@ class GenConfig:
     plan_only: bool = False  # write the plan (meta/scenes.parquet) and its audit, simulate nothing
     holdout: Optional[List[str]] = None  # values kept out of the dataset entirely
     distractor_only: Optional[List[str]] = None  # values that appear but are never the target
+    targets: Optional[List[str]] = None  # the only values that may be the target (e.g. held-out ones in an exam)
+    split: str = "train"  # train: a LeRobot dataset; exam: an exam (held-out random stream, no video)
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
 
 
@@ -84,12 +86,16 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"fps must divide the physics rate of {physics_hz} Hz (e.g. 10, 20, 25, 50), got {cfg.fps}")
     if cfg.codec not in CODECS:
         raise UserError(f"codec must be one of {', '.join(CODECS)}, got {cfg.codec!r}")
+    if cfg.split not in ("train", "exam"):
+        raise UserError(f"split must be train or exam, got {cfg.split!r}")
+    if cfg.split == "exam" and cfg.plan_only:
+        raise UserError("plan_only=true and split=exam do not combine: an exam is already simulation-free to read")
     if cfg.max_attempts < 1:
         raise UserError(f"max_attempts must be at least 1, got {cfg.max_attempts}")
     if cfg.objects_per_scene is not None and cfg.objects_per_scene < 1:
         raise UserError(f"objects_per_scene must be at least 1, got {cfg.objects_per_scene}")
     if cfg.out is None:
-        cfg.out = str(Path("datasets") / cfg.referent)
+        cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
     check_output(Path(cfg.out), cfg.overwrite)
 
 

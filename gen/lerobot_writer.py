@@ -196,7 +196,9 @@ class LeRobotWriter:
             current = None
             at.next()
         if current is None:
-            path = self.root / VIDEO_PATH.format(video_key=self.layout.video_key(camera), chunk_index=at.chunk, file_index=at.file)
+            path = self.root / VIDEO_PATH.format(
+                video_key=self.layout.video_key(camera), chunk_index=at.chunk, file_index=at.file
+            )
             current = self._video[camera] = VideoFile(path, self.layout.fps)
         start, end = current.append(mp4)
         key = self.layout.video_key(camera)
@@ -217,7 +219,7 @@ class LeRobotWriter:
         (meta / "episodes/chunk-000").mkdir(parents=True, exist_ok=True)
         pq.write_table(pa.Table.from_pylist(self.episodes), self.root / EPISODES_PATH)
         tasks = pd.DataFrame({"task_index": list(self.tasks.values())}, index=pd.Index(list(self.tasks), name="task"))
-        tasks.to_parquet(meta / "tasks.parquet")
+        pq.write_table(pa.Table.from_pandas(tasks), meta / "tasks.parquet")
         dataset_stats = {k: st.vector_stats(np.concatenate(v)) for k, v in self._vectors.items()}
         for cam in self.layout.cameras:
             dataset_stats[self.layout.video_key(cam)] = st.image_stats(self._histograms[cam], self.frames)

@@ -16,15 +16,20 @@ from oracle.world import TABLE_TOP_Z
 from referents import Referent
 from referents.base import Balance, Design
 
+# Extra entropy of each split's random streams: an exam never re-draws a training scene.
+SPLITS = {"train": (), "exam": (0xE7A3,)}
 
-def designs(referent: Referent, n: int, seed: int) -> list[Design]:
-    balance = Balance(np.random.default_rng(seed))
+
+def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list[Design]:
+    balance = Balance(np.random.default_rng([seed, *SPLITS[split]] if SPLITS[split] else seed))
     return [referent.design(balance) for _ in range(n)]
 
 
-def realize(referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0) -> EpisodeSpec:
+def realize(
+    referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0, split: str = "train"
+) -> EpisodeSpec:
     layout = referent.config.layout
-    rng = np.random.default_rng([seed, index, attempt])
+    rng = np.random.default_rng([seed, index, attempt, *SPLITS[split]])
     objects = []
     for p in design.placements:
         kind = catalog.kind(p.candidate.kind)
@@ -47,8 +52,9 @@ def realize(referent: Referent, design: Design, index: int, seed: int, sim: SimS
         task=design.task or referent.config.task,
         sim=sim,
         attempt=attempt,
+        split=split,
     )
 
 
-def plan(referent: Referent, n: int, seed: int, sim: SimSettings) -> list[EpisodeSpec]:
-    return [realize(referent, d, i, seed, sim) for i, d in enumerate(designs(referent, n, seed))]
+def plan(referent: Referent, n: int, seed: int, sim: SimSettings, split: str = "train") -> list[EpisodeSpec]:
+    return [realize(referent, d, i, seed, sim, split=split) for i, d in enumerate(designs(referent, n, seed, split))]

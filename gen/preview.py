@@ -15,9 +15,8 @@ from pathlib import Path
 import av
 import cv2
 import numpy as np
-import pandas as pd
 
-from gen import scenes
+from gen import parquet, scenes
 from gen.spec import EpisodeSpec
 
 TILE = 256
@@ -26,13 +25,17 @@ CAPTION = 54
 
 def video_frames(root: Path, camera: str, episodes: list[int]) -> dict[int, np.ndarray]:
     """First frame of each episode, decoded from the dataset's mp4 files."""
-    meta = pd.read_parquet(root / "meta/episodes").set_index("episode_index")
+    meta = parquet.read(root / "meta/episodes").set_index("episode_index")
     key = f"videos/observation.images.{camera}"
     wanted: dict[Path, dict[int, int]] = {}
     fps = None
     for ep in episodes:
         row = meta.loc[ep]
-        path = root / f"videos/observation.images.{camera}/chunk-{int(row[key + '/chunk_index']):03d}/file-{int(row[key + '/file_index']):03d}.mp4"
+        path = (
+            root
+            / f"videos/observation.images.{camera}"
+            / f"chunk-{int(row[key + '/chunk_index']):03d}/file-{int(row[key + '/file_index']):03d}.mp4"
+        )
         wanted.setdefault(path, {})[ep] = row[key + "/from_timestamp"]
     out: dict[int, np.ndarray] = {}
     for path, starts in wanted.items():

@@ -47,15 +47,24 @@ class Producer:
         self.codec = codec
         self.scene: Scene = scene_for(referent.assets())
         self.ik = ArmIK(np.asarray(sim.robot_home))
-        self.cameras = Cameras(self.scene, sim.image_size, sim.cameras)
+        self._cameras: Cameras | None = None  # made on first use: exams never render
+
+    @property
+    def cameras(self) -> Cameras:
+        if self._cameras is None:
+            self._cameras = Cameras(self.scene, self.sim.image_size, self.sim.cameras)
+        return self._cameras
 
     def close(self) -> None:
-        self.cameras.close()
+        if self._cameras is not None:
+            self._cameras.close()
 
-    def demonstrate(self, design: Design, index: int, seed: int, max_attempts: int) -> tuple[Demo, list[str]]:
+    def demonstrate(
+        self, design: Design, index: int, seed: int, max_attempts: int, split: str = "train"
+    ) -> tuple[Demo, list[str]]:
         failures: list[str] = []
         for attempt in range(max_attempts):
-            spec = realize(self.referent, design, index, seed, self.sim, attempt)
+            spec = realize(self.referent, design, index, seed, self.sim, attempt, split)
             demo = demonstrate(self.scene, self.ik, spec, self.referent.demo)
             if demo.success:
                 return demo, failures

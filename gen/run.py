@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import json
 import os
-from importlib import metadata
 import platform
 import shutil
 import time
 from dataclasses import asdict, dataclass
+from importlib import metadata
 from pathlib import Path
 
 import referents
@@ -22,6 +22,7 @@ from gen.audit import agree, audit
 from gen.config import GenConfig, UserError
 from gen.plan import designs, realize
 from gen.spec import EpisodeSpec, SimSettings
+from oracle.world import ACTION_NAMES, STATE_NAMES
 from referents import Referent, UnknownReferent
 from referents.base import ReferentSpecError
 
@@ -38,8 +39,15 @@ class Summary:
     seconds: float
     verdict: str
     plan_only: bool = False
+    exam: bool = False
 
     def __str__(self) -> str:
+        if self.exam:
+            return (
+                f"wrote an exam of {self.episodes} oracle-solvable trials to {self.out} in {self.seconds:.1f} s\n"
+                f"confound audit of its plan: {self.verdict}\n"
+                f"take it with: python -m eval policy=<policy> exam={self.out}"
+            )
         if self.plan_only:
             return (
                 f"planned {self.episodes} episodes to {self.out} (nothing simulated) in {self.seconds:.1f} s\n"
@@ -61,6 +69,7 @@ def load_referent(cfg: GenConfig) -> Referent:
         "objects_per_scene": cfg.objects_per_scene,
         "holdout": cfg.holdout,
         "distractor_only": cfg.distractor_only,
+        "targets": cfg.targets,
         "confound": cfg.confound,
     }
     try:
@@ -89,10 +98,10 @@ def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     referent = load_referent(cfg)
     sim = sim_settings(cfg)
     try:
-        plan = designs(referent, cfg.n, cfg.seed)
+        plan = designs(referent, cfg.n, cfg.seed, cfg.split)
     except ReferentSpecError as exc:
         raise UserError(str(exc)) from None
-    planned = [realize(referent, d, i, cfg.seed, sim) for i, d in enumerate(plan)]
+    planned = [realize(referent, d, i, cfg.seed, sim, split=cfg.split) for i, d in enumerate(plan)]
     audits: dict = {"planned": audit(referent, planned)}
     check_audit(audits["planned"])
     out = Path(cfg.out or f"datasets/{referent.name}")
@@ -100,6 +109,13 @@ def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     shutil.rmtree(staging, ignore_errors=True)
     try:
         (staging / "meta").mkdir(parents=True)
+        if cfg.split == "exam":
+            (staging / "meta").rmdir()
+            n_trials = _examine(cfg, referent, sim, plan, staging, audits["planned"], progress)
+            summary = Summary(out, n_trials, 0, 0, time.perf_counter() - start, audits["planned"]["verdict"], exam=True)
+            card.write_exam(staging, referent, cfg, summary, audits["planned"])
+            _publish(staging, out)
+            return summary
         if cfg.plan_only:
             rows = [scenes.row(i, spec) for i, spec in enumerate(planned)]
             frames = failed = 0
@@ -129,7 +145,6 @@ def _simulate(
 
     from gen.lerobot_writer import Layout, LeRobotWriter
     from gen.produce import DemoFailed, Producer
-    from oracle.scene import ACTION_NAMES, STATE_NAMES
 
     writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
     producer = Producer(referent, sim, cfg.codec)
@@ -147,6 +162,49 @@ def _simulate(
     writer.finalize()
     producer.close()
     return rows, writer.frames, failed, written
+
+
+def _examine(cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, root: Path, report: dict, progress: bool) -> int:
+    """Check every exam trial is solvable by the oracle (resampling poses as for datasets) and
+    write the exam with each trial's initial state and rollout horizon."""
+    import numpy as np
+    from tqdm import tqdm
+
+    from gen import exam
+    from gen.produce import DemoFailed, Producer
+
+    producer = Producer(referent, sim)
+    rows: list[dict] = []
+    for i, design in enumerate(tqdm(plan, desc=f"{referent.name} exam", unit="trial", disable=not progress)):
+        try:
+            demo, _ = producer.demonstrate(design, i, cfg.seed, cfg.max_attempts, split="exam")
+        except DemoFailed as exc:
+            raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
+        producer.scene.reset(demo.spec)
+        state = producer.scene.physics_state().astype(np.float64).tolist()
+        horizon = int(np.ceil(1.5 * len(demo.actions))) + 20
+        rows += exam.trial_rows(i, demo.spec, referent.alternatives(demo.spec), state, horizon)
+    exam.write(
+        root,
+        rows,
+        {
+            "referent": referent.name,
+            "seed": cfg.seed,
+            "split": "exam",
+            "command": card.command(cfg),
+            "observation": {
+                "keys": [f"observation.images.{c}" for c in sim.cameras] + ["observation.state", "task"],
+                "image_size": sim.image_size,
+                "fps": sim.fps,
+                "state_names": list(STATE_NAMES),
+                "action_names": list(ACTION_NAMES),
+                "action": "joint-position targets 1-7 (rad) and gripper command (-1 open, +1 closed), held for 1/fps s",
+            },
+            "referent_spec": asdict(referent.config),
+            "audit": report,
+        },
+    )
+    return len(plan)
 
 
 def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: Summary) -> None:

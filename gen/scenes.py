@@ -21,6 +21,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from gen import parquet
 from gen.spec import EpisodeSpec
 
 if TYPE_CHECKING:
@@ -52,7 +53,7 @@ def write(root: Path, rows: list[dict]) -> None:
 
 
 def read(root: Path) -> pd.DataFrame:
-    return pd.read_parquet(root / SCENES_PATH)
+    return parquet.read(root / SCENES_PATH)
 
 
 def specs(root: Path) -> list[EpisodeSpec]:

@@ -81,7 +81,8 @@ class EpisodeSpec:
     `assets` is the model's inventory (catalog kind -> number of bodies): objects not in the
     scene are parked out of view, so every episode of a dataset shares one compiled model.
     `attempt` counts oracle failures: a failed demo is re-realised with new pose noise but the
-    same roles, so resampling never changes the role balance.
+    same roles, so resampling never changes the role balance. `split` ("train" or "exam")
+    selects the random stream, so exam scenes never coincide with training scenes.
     """
 
     referent: str
@@ -96,6 +97,7 @@ class EpisodeSpec:
     task: TaskSpec = TaskSpec()
     sim: SimSettings = SimSettings()
     attempt: int = 0
+    split: str = "train"
     version: int = SPEC_VERSION
 
     def choice(self, cf: Counterfactual | None = None) -> tuple[str, str]:
@@ -175,6 +177,7 @@ class EpisodeSpec:
                     robot_home=tuple(float(v) for v in d["sim"]["robot_home"]),
                 ),
                 attempt=int(d["attempt"]),
+                split=str(d.get("split", "train")),
                 version=version,
             )
         except SpecError:

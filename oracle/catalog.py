@@ -79,13 +79,26 @@ KINDS: dict[str, Kind] = {
         Kind("block_large", "BoxObject", (0.056, 0.056, 0.056), 0.028, colorable=True, params=_cube(0.056)),
         Kind("cylinder", "CylinderObject", (0.040, 0.040, 0.060), 0.030, colorable=True, params={"size": [0.02, 0.03]}),
         Kind("ball", "BallObject", (0.056, 0.056, 0.056), 0.028, colorable=True, params={"size": [0.028]}),
-        Kind("plate", "CylinderObject", (0.150, 0.150, 0.012), 0.006, params={"size": [0.075, 0.006], "rgba": [0.55, 0.7, 0.9, 1]}, inner=0.06),
+        Kind(
+            "plate",
+            "CylinderObject",
+            (0.150, 0.150, 0.012),
+            0.006,
+            params={"size": [0.075, 0.006], "rgba": [0.55, 0.7, 0.9, 1]},
+            inner=0.06,
+        ),
         Kind(
             "basket",
             "Bin",
             (0.150, 0.150, 0.060),
             0.030,
-            params={"bin_size": [0.15, 0.15, 0.06], "wall_thickness": 0.008, "transparent_walls": False, "use_texture": False, "rgba": [0.55, 0.35, 0.15, 1]},
+            params={
+                "bin_size": [0.15, 0.15, 0.06],
+                "wall_thickness": 0.008,
+                "transparent_walls": False,
+                "use_texture": False,
+                "rgba": [0.55, 0.35, 0.15, 1],
+            },
             inner=0.055,
         ),
     )

@@ -16,7 +16,7 @@ from gen.spec import EpisodeSpec
 from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene
 from oracle.skills import Skills
-from oracle.success import Outcome, measure, start_positions, succeeded
+from oracle.success import Outcome, succeeded
 
 Plan = Callable[[Skills, EpisodeSpec], None]
 
@@ -30,27 +30,30 @@ class Demo:
     failure: str = ""
 
 
+def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outcome:
+    ee = scene.ee_pos()
+    return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])))
+
+
 def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
     scene.reset(spec)
-    start = start_positions(scene, spec)
+    start = scene.positions()
     skills = Skills(scene, ik, spec)
     try:
         plan(skills, spec)
     except IKError as exc:
         return Demo(spec, np.asarray(skills.actions, np.float32).reshape(-1, 8), None, False, str(exc))
-    outcome = measure(scene, spec, start)
+    outcome = measure(scene, start)
     ok = succeeded(spec, outcome)
     return Demo(spec, np.asarray(skills.actions, np.float32), outcome, ok, "" if ok else "success predicate false")
 
 
-def replay(
-    scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callable[[int], None] | None = None
-) -> Outcome:
+def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callable[[int], None] | None = None) -> Outcome:
     """Re-execute `actions` from the spec's initial state; `observe(t)` runs before action t."""
     scene.reset(spec)
-    start = start_positions(scene, spec)
+    start = scene.positions()
     for t, action in enumerate(actions):
         if observe is not None:
             observe(t)
         scene.step(action)
-    return measure(scene, spec, start)
+    return measure(scene, start)

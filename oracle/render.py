@@ -6,6 +6,8 @@ on llvmpipe; none of them helps a policy (README: rendering).
 
 from __future__ import annotations
 
+import atexit
+
 import mujoco
 import numpy as np
 
@@ -28,6 +30,9 @@ class Cameras:
         self.option.geomgroup[0] = False  # collision geoms
         self.option.sitegroup[:] = False
         self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
+        self._closed = False
+        # Free the GL context before interpreter teardown, which otherwise reports EGL errors.
+        atexit.register(self.close)
 
     def render(self) -> dict[str, np.ndarray]:
         """One frame per camera; the arrays are reused by the next call."""
@@ -37,4 +42,6 @@ class Cameras:
         return self._buffers
 
     def close(self) -> None:
-        self.renderer.close()
+        if not self._closed:
+            self._closed = True
+            self.renderer.close()

@@ -2,7 +2,7 @@
 
 A model is compiled once per asset inventory (the spec's `assets`) and every episode re-poses
 it through the simulator state: objects in the episode are moved onto the table, the rest are
-parked under it. The arm's torque motors become joint-position servos with gravity
+parked under it, out of every camera's view and out of the contact solver. The arm's torque motors become joint-position servos with gravity
 compensation, so an action is exactly what a joint-position controller executes:
 seven joint targets and a gripper command (-1 open, +1 closed).
 """
@@ -39,20 +39,6 @@ FINGER_OPEN = 0.04  # finger joint travel, metres
 # Joint-position servo gains (N m / rad, N m s / rad), joints 1..7.
 SERVO_KP = (1500.0, 1500.0, 1500.0, 1500.0, 600.0, 400.0, 200.0)
 SERVO_KV = (120.0, 120.0, 120.0, 120.0, 40.0, 25.0, 12.0)
-
-STATE_NAMES = (
-    *(f"joint{i}" for i in range(1, 8)),
-    "finger_left",
-    "finger_right",
-    "ee_x",
-    "ee_y",
-    "ee_z",
-    "ee_qw",
-    "ee_qx",
-    "ee_qy",
-    "ee_qz",
-)
-ACTION_NAMES = (*(f"joint{i}_target" for i in range(1, 8)), "gripper")
 
 
 def _robot():
@@ -120,9 +106,7 @@ def _configure(root: ET.Element) -> None:
 def scene_xml(assets: tuple[tuple[str, int], ...]) -> str:
     """The MJCF of a scene holding `count` bodies of each catalog kind."""
     arena = TableArena(table_full_size=world.TABLE_SIZE, table_offset=(0, 0, world.TABLE_TOP_Z))
-    objects = [
-        _build_object(catalog.kind(kind), f"{kind}{i}") for kind, count in sorted(assets) for i in range(count)
-    ]
+    objects = [_build_object(catalog.kind(kind), f"{kind}{i}") for kind, count in sorted(assets) for i in range(count)]
     task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot()], mujoco_objects=objects)
     root = ET.fromstring(task.get_xml())
     _servo_and_gravcomp(root)
@@ -147,6 +131,7 @@ class Body:
     qvel_adr: int
     geom_ids: tuple[int, ...]
     park: np.ndarray  # free-joint qpos when not in the episode
+    collision: tuple[tuple[int, int], ...]  # compiled (contype, conaffinity) of each geom
 
 
 class Scene:
@@ -173,9 +158,9 @@ class Scene:
                 geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] == body_id)
                 x, y = spots[index % len(spots)]
                 park = np.array([x, y, kind.rest_z(0.0) + 0.001 * (index // len(spots)), 1, 0, 0, 0])
-                self.bodies.setdefault(kind_name, []).append(
-                    Body(kind, body_id, joint.qposadr[0], joint.dofadr[0], geoms, park)
-                )
+                collision = tuple((int(m.geom_contype[g]), int(m.geom_conaffinity[g])) for g in geoms)
+                body = Body(kind, body_id, joint.qposadr[0], joint.dofadr[0], geoms, park, collision)
+                self.bodies.setdefault(kind_name, []).append(body)
                 index += 1
         if index > len(spots):
             raise ValueError(f"scene holds {index} objects but only {len(spots)} parking spots")
@@ -199,10 +184,21 @@ class Scene:
             body = free[obj.kind].pop(0)
             self.placed[obj.id] = body
             self._pose(body, obj)
+            self._park(body, False)
         for bodies in free.values():
             for body in bodies:
                 d.qpos[body.qpos_adr : body.qpos_adr + 7] = body.park
+                self._park(body, True)
         mujoco.mj_forward(m, d)
+
+    def _park(self, body: Body, parked: bool) -> None:
+        """A parked body floats where it is (gravity-compensated) and touches nothing, so it
+        costs the contact solver nothing; a placed one gets its compiled collisions back."""
+        m = self.model
+        m.body_gravcomp[body.body_id] = 1.0 if parked else 0.0
+        for g, (contype, conaffinity) in zip(body.geom_ids, body.collision):
+            m.geom_contype[g] = 0 if parked else contype
+            m.geom_conaffinity[g] = 0 if parked else conaffinity
 
     def _pose(self, body: Body, obj: SceneObject) -> None:
         half = obj.yaw / 2
@@ -232,6 +228,10 @@ class Scene:
 
     def object_pos(self, object_id: str) -> np.ndarray:
         return self.data.xpos[self.placed[object_id].body_id].copy()
+
+    def positions(self) -> dict[str, tuple[float, float, float]]:
+        """Where every object of the episode is now."""
+        return {k: tuple(float(v) for v in self.data.xpos[b.body_id]) for k, b in self.placed.items()}  # type: ignore[misc]
 
     def object_yaw(self, object_id: str) -> float:
         mat = self.data.xmat[self.placed[object_id].body_id].reshape(3, 3)

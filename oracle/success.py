@@ -1,7 +1,8 @@
 """Success predicates, one per motor program: false at the initial state by construction.
 
 Every measure is relative to where the objects started, so a scene whose target starts high
-cannot score, and a do-nothing rollout achieves nothing.
+cannot score, and a do-nothing rollout achieves nothing. Plain data in, no simulator: the exam
+scorer judges logged rollouts with the same predicates.
 
 * pick  — the target rose by at least `lift_margin` and no other object did.
 * push  — the target slid at least `push_margin` along the push direction, never left the table
@@ -18,7 +19,6 @@ import numpy as np
 
 from gen.spec import EpisodeSpec
 from oracle import catalog
-from oracle.scene import Scene
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
 PUSH_MARGIN = 0.05
@@ -40,18 +40,6 @@ class Outcome:
     def shift(self, object_id: str) -> np.ndarray:
         """Horizontal displacement (dx, dy)."""
         return np.subtract(self.end[object_id][:2], self.start[object_id][:2])
-
-
-def _xyz(v: np.ndarray) -> tuple[float, float, float]:
-    return (float(v[0]), float(v[1]), float(v[2]))
-
-
-def start_positions(scene: Scene, spec: EpisodeSpec) -> dict[str, tuple[float, float, float]]:
-    return {o.id: _xyz(scene.object_pos(o.id)) for o in spec.objects}
-
-
-def measure(scene: Scene, spec: EpisodeSpec, start: dict[str, tuple[float, float, float]]) -> Outcome:
-    return Outcome(start, {o.id: _xyz(scene.object_pos(o.id)) for o in spec.objects}, _xyz(scene.ee_pos()))
 
 
 def lifted(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:

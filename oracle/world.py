@@ -25,3 +25,18 @@ PARK_Y = (-0.3, -0.1, 0.1, 0.3)
 
 PHYSICS_DT = 0.002  # simulation timestep, seconds; control periods are whole multiples of it
 MAX_IMAGE_SIZE = 1024  # largest square frame a renderer may ask for
+
+# The recorded vectors (README: what a dataset holds).
+STATE_NAMES = (
+    *(f"joint{i}" for i in range(1, 8)),
+    "finger_left",
+    "finger_right",
+    "ee_x",
+    "ee_y",
+    "ee_z",
+    "ee_qw",
+    "ee_qx",
+    "ee_qy",
+    "ee_qz",
+)
+ACTION_NAMES = (*(f"joint{i}_target" for i in range(1, 8)), "gripper")

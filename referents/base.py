@@ -72,8 +72,9 @@ class ReferentConfig:
     """A referent type's declarative spec (referents/<type>.yaml), validated.
 
     `naming` is the variable the instruction names the target by ("name" or an attribute);
-    `holdout` values never appear, `distractor_only` values never are the target, and
-    `confound` deliberately re-introduces a shortcut (only "position") for comparisons.
+    `holdout` values never appear, `distractor_only` values never are the target, `targets`
+    (when given) are the only values that may be (e.g. an exam of exactly the held-out values),
+    and `confound` deliberately re-introduces a shortcut (only "position") for comparisons.
     """
 
     type: str
@@ -86,6 +87,7 @@ class ReferentConfig:
     task: TaskSpec = TaskSpec()
     holdout: tuple[str, ...] = ()
     distractor_only: tuple[str, ...] = ()
+    targets: tuple[str, ...] = ()
     confound: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)  # type-specific fields
 
@@ -114,14 +116,22 @@ class ReferentConfig:
         if len({c.key for c in objects}) != len(objects):
             raise fail("objects", "two objects share the same name and attributes")
         vocabulary: dict[str, tuple[str, ...]] = {}
-        for option in ("holdout", "distractor_only"):
+        for option in ("holdout", "distractor_only", "targets"):
             values = tuple(str(v) for v in (data.pop(option, None) or ()))
             for v in values:
                 if not any(c.matches(v) for c in objects):
                     raise fail(option, f"{v!r} names no object of this referent")
             vocabulary[option] = values
         objects = [c for c in objects if not any(c.matches(v) for v in vocabulary["holdout"])]
-        objects = [replace(c, targetable=not any(c.matches(v) for v in vocabulary["distractor_only"])) for c in objects]
+        only = vocabulary["targets"]
+        objects = [
+            replace(
+                c,
+                targetable=not any(c.matches(v) for v in vocabulary["distractor_only"])
+                and (not only or any(c.matches(v) for v in only)),
+            )
+            for c in objects
+        ]
         layout = _layout(data.pop("layout"), fail)
         k = data.pop("objects_per_scene")
         if not isinstance(k, int) or k < 1:
@@ -129,7 +139,7 @@ class ReferentConfig:
         if k > len(layout.slots):
             raise fail("objects_per_scene", f"{k} objects cannot fit in the {len(layout.slots)} slots of layout.slots")
         if not any(c.targetable for c in objects):
-            raise fail("distractor_only", "leaves no object that can be the target")
+            raise fail("distractor_only" if not only else "targets", "leaves no object that can be the target")
         templates = tuple(str(t) for t in data.pop("templates") or [])
         if not templates:
             raise fail("templates", "needs at least one instruction template")
@@ -151,6 +161,7 @@ class ReferentConfig:
             task=task,
             holdout=vocabulary["holdout"],
             distractor_only=vocabulary["distractor_only"],
+            targets=vocabulary["targets"],
             confound=confound,
             extra=data,
         )
@@ -264,10 +275,7 @@ class Balance:
         """Least-used option under `key`, ties broken by `also` (a second key), then at random."""
         if not options:
             raise ValueError(f"no options to choose {key!r} from")
-        scores = [
-            (self.counts[(key, self._id(o))], self.counts[(also, self._id(o))] if also is not None else 0)
-            for o in options
-        ]
+        scores = [(self.counts[(key, self._id(o))], self.counts[(also, self._id(o))] if also is not None else 0) for o in options]
         best = min(scores)
         ties = [o for o, s in zip(options, scores) if s == best]
         choice = ties[int(self.rng.integers(len(ties)))]
@@ -353,7 +361,10 @@ def object_features(spec: EpisodeSpec, obj: SceneObject) -> dict[str, Hashable]:
         "y bin (5 cm)": int(np.floor(obj.pos[1] / 0.05)),
         "identity": object_key(obj.name, obj.attributes),
         "kind": obj.kind,
-        "composition": (tuple(sorted(object_key(o.name, o.attributes) for o in spec.objects)), object_key(obj.name, obj.attributes)),
+        "composition": (
+            tuple(sorted(object_key(o.name, o.attributes) for o in spec.objects)),
+            object_key(obj.name, obj.attributes),
+        ),
     }
     for attr, value in obj.attributes.items():
         features[f"{attr} at slot"] = (value, obj.slot)
@@ -361,7 +372,9 @@ def object_features(spec: EpisodeSpec, obj: SceneObject) -> dict[str, Hashable]:
 
 
 def object_alternatives(
-    cfg: ReferentConfig, spec: EpisodeSpec, ids: Sequence[str] | None = None,
+    cfg: ReferentConfig,
+    spec: EpisodeSpec,
+    ids: Sequence[str] | None = None,
     extra: Callable[[SceneObject], dict[str, Hashable]] | None = None,
 ) -> list[Alternative]:
     """Objects as alternatives (all of the scene's, or `ids`), valued by the naming variable."""
@@ -408,6 +421,10 @@ def crossed_scene(cfg: ReferentConfig, balance: Balance, axis: str) -> Crossed:
     for i, cell in enumerate(cells):
         cand = table[cell]
         free = [s for s in slots if s not in {p.slot for p in objects.values()}]
-        slot = target_slot(cfg, balance, cand.key, free) if i == 0 else balance.pick(("distractor_slot", cand.key), free, also="slot")
+        slot = (
+            target_slot(cfg, balance, cand.key, free)
+            if i == 0
+            else balance.pick(("distractor_slot", cand.key), free, also="slot")
+        )
         objects[cell] = Placement(slug(cand.key), cand, slot)
     return Crossed(tuple(sorted(objects.values(), key=lambda p: p.slot)), objects, (a_target, a_other), (c_target, c_other))

@@ -10,14 +10,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
+from helpers import make_dataset
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 import referents
-from gen import scenes
+from gen import parquet, scenes
 from gen.spec import EpisodeSpec
-from helpers import make_dataset
 from oracle.scene import scene_for
 from oracle.success import Outcome, succeeded
 
@@ -46,7 +45,7 @@ def test_lerobot_doctor_passes(dataset: Path) -> None:
 
 
 def test_every_episode_replays_to_success(dataset: Path) -> None:
-    data = pd.read_parquet(dataset / "data")
+    data = parquet.read(dataset / "data")
     for _, rec in scenes.read(dataset).iterrows():
         spec = EpisodeSpec.from_json(rec["spec"])
         scene = scene_for(spec.assets)

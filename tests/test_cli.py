@@ -70,7 +70,10 @@ def test_unwritable_out(tmp_path: Path) -> None:
 
 def test_bad_spec_file_is_named(tmp_path: Path, existing: Path) -> None:
     spec = tmp_path / "bad.yaml"
-    spec.write_text("type: object\nnaming: name\nobjects_per_scene: 4\nobjects: [{kind: unicorn, name: unicorn}]\nlayout: {slots: [[0, 0]]}\ntemplates: ['x']\n")
+    spec.write_text(
+        "type: object\nnaming: name\nobjects_per_scene: 4\nobjects: [{kind: unicorn, name: unicorn}]\n"
+        "layout: {slots: [[0, 0]]}\ntemplates: ['x']\n"
+    )
     result = run_gen(f"spec={spec}", f"out={existing}", "overwrite=true")
     assert result.returncode != 0 and "objects[0].kind" in result.stderr and "unicorn" in result.stderr
     assert _untouched(existing)

@@ -9,12 +9,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
+from helpers import make_dataset
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-from gen import scenes
+from gen import parquet, scenes
 from gen.spec import EpisodeSpec
-from helpers import make_dataset
 
 
 def test_lerobot_loader_decodes_every_episode(object_dataset: Path) -> None:
@@ -57,7 +56,7 @@ def test_lerobot_doctor_finds_no_failure(object_dataset: Path) -> None:
 
 def test_stats_are_exact_and_images_vary(object_dataset: Path) -> None:
     stats = json.loads((object_dataset / "meta/stats.json").read_text())
-    data = pd.read_parquet(object_dataset / "data")
+    data = parquet.read(object_dataset / "data")
     actions = np.stack(data["action"].to_numpy())
     np.testing.assert_allclose(stats["action"]["mean"], actions.mean(0), rtol=1e-6, atol=1e-7)
     np.testing.assert_allclose(stats["action"]["std"], actions.std(0), rtol=1e-5, atol=1e-7)
@@ -66,12 +65,12 @@ def test_stats_are_exact_and_images_vary(object_dataset: Path) -> None:
         assert np.asarray(s["std"]).shape == (3, 1, 1)
         assert min(np.ravel(s["std"])) > 0.05, "image std must not collapse to 0"
         assert all(0.0 <= v <= 1.0 for v in np.ravel(s["mean"]))
-    episodes = pd.read_parquet(object_dataset / "meta/episodes")
+    episodes = parquet.read(object_dataset / "meta/episodes")
     assert {"dataset_from_index", "dataset_to_index", "videos/observation.images.wrist/from_timestamp"} <= set(episodes)
 
 
 def test_tasks_are_indexed_by_instruction(object_dataset: Path) -> None:
-    tasks = pd.read_parquet(object_dataset / "meta/tasks.parquet")
+    tasks = parquet.read(object_dataset / "meta/tasks.parquet")
     records = scenes.read(object_dataset)
     assert set(tasks.index) == set(records["instruction"])
     assert sorted(tasks["task_index"]) == list(range(len(tasks)))
@@ -95,8 +94,25 @@ def test_scene_records_schema(object_dataset: Path) -> None:
 def test_same_seed_same_bytes(tmp_path: Path) -> None:
     a = make_dataset(tmp_path / "a", "n=2", "image_size=32", "seed=3")
     b = make_dataset(tmp_path / "b", "n=2", "image_size=32", "seed=3")
-    for rel in ("meta/scenes.parquet", "data/chunk-000/file-000.parquet", "meta/stats.json",
-                "videos/observation.images.agentview/chunk-000/file-000.mp4"):
+    for rel in (
+        "meta/scenes.parquet",
+        "data/chunk-000/file-000.parquet",
+        "meta/stats.json",
+        "videos/observation.images.agentview/chunk-000/file-000.mp4",
+    ):
         assert (a / rel).read_bytes() == (b / rel).read_bytes(), rel
     c = make_dataset(tmp_path / "c", "n=2", "image_size=32", "seed=4")
     assert (a / "meta/scenes.parquet").read_bytes() != (c / "meta/scenes.parquet").read_bytes()
+
+
+def test_contact_sheet(object_dataset: Path, tmp_path: Path) -> None:
+    import cv2
+
+    from gen.preview import contact_sheet
+
+    sheet = cv2.imread(str(contact_sheet(object_dataset, tmp_path / "sheet.png", n=4)))
+    assert sheet.shape == (256 + 54, 4 * 256, 3)
+    assert sheet[:256].std() > 10  # real frames, not blank tiles
+    plan = make_dataset(tmp_path / "plan", "referent=negation", "n=3", "plan_only=true")
+    rendered = cv2.imread(str(contact_sheet(plan, tmp_path / "plan.png")))
+    assert rendered.shape[0] == 256 + 54 and rendered[:256, :256].std() > 10

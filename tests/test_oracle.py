@@ -8,11 +8,10 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-import pandas as pd
 import pytest
 
 import referents
-from gen import scenes
+from gen import parquet, scenes
 from gen.plan import designs, plan, realize
 from gen.produce import Producer
 from gen.spec import EpisodeSpec, SimSettings
@@ -92,7 +91,7 @@ def test_grasping_the_wrong_object_fails(scene: Scene, ik: ArmIK) -> None:
 
 def test_replay_from_recorded_state_lifts_the_same_target(object_dataset: Path) -> None:
     records = scenes.read(object_dataset)
-    data = pd.read_parquet(object_dataset / "data")
+    data = parquet.read(object_dataset / "data")
     for _, rec in records.iterrows():
         spec = EpisodeSpec.from_json(rec["spec"])
         actions = np.stack(data[data.episode_index == rec["episode_index"]]["action"].to_numpy())

@@ -29,7 +29,10 @@ def _gen(*args: str) -> subprocess.CompletedProcess[str]:
     [
         (lambda d: d.pop("templates"), "templates: missing field"),
         (lambda d: d.pop("naming"), "naming: missing field"),
-        (lambda d: d["objects"][0]["attributes"].update(color=["red", "mauve"]), "objects[0].attributes.color: unknown color 'mauve'"),
+        (
+            lambda d: d["objects"][0]["attributes"].update(color=["red", "mauve"]),
+            "objects[0].attributes.color: unknown color 'mauve'",
+        ),
         (lambda d: d["objects"][0].update(kind="spaceship"), "objects[0].kind: unknown kind 'spaceship'"),
         (lambda d: d.update(objects_per_scene=9), "objects_per_scene: 9 objects cannot fit in the 6 slots"),
         (lambda d: d["layout"]["slots"].append([0.9, 0.0]), "layout.slots[6]: (0.9, 0.0) is off the table"),

@@ -120,7 +120,7 @@ def test_holdout_and_distractor_only() -> None:
     assert "purple" not in colors
     assert colors["orange"] > 0 and targets["orange"] == 0
     report = audit(ref, specs)
-    assert report["vocabulary"] == {"holdout": ["purple"], "distractor_only": ["orange"]}
+    assert report["vocabulary"] == {"holdout": ["purple"], "distractor_only": ["orange"], "targets": []}
     assert not report["unexpected_leaks"]
 
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
+from gen import parquet
 from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram, image_stats
 from gen.video import encode_episode
@@ -56,7 +56,7 @@ def test_rotation_and_decoding(tmp_path: Path) -> None:
             assert abs(float(frame[1].mean()) * 255 - ep * 60) < 4
             assert item["task"] == f"task {ep % 2}"
             assert float(item["action"][0]) == ep
-    episodes = pd.read_parquet(tmp_path / "meta/episodes")
+    episodes = parquet.read(tmp_path / "meta/episodes")
     assert list(episodes["length"]) == lengths
 
 

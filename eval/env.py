@@ -1,0 +1,115 @@
+"""The exam as a gymnasium environment, for labs that roll out in their own loop.
+
+    import gymnasium as gym
+    env = gym.make("eval.env:deconfound/Exam-v0", exam="datasets/object-exam", trial=3, face="swap", variant=1)
+    obs, info = env.reset()          # info["instruction"] is the rollout's instruction
+    obs, reward, terminated, truncated, info = env.step(action)
+
+Each environment is one row of the exam (`row=` or `trial=`/`face=`/`variant=`): the trial's
+scene rebuilt at its recorded initial state, with its cameras (blank on the occ face). The
+observation has the dataset's keys; the action is the dataset's (7 joint targets + gripper).
+`reward` is 1.0 while the asked-for program is achieved; the episode truncates at the row's
+horizon. `info` carries the end-effector and object positions the offline scorer takes
+(`python -m eval.score`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
+from eval.policies import JOINT_HIGH, JOINT_LOW
+from eval.rollout import check_action, observe
+from gen.exam import Exam, read
+from gen.spec import EpisodeSpec
+from oracle.render import Cameras
+from oracle.scene import scene_for
+from oracle.success import Outcome, achieved
+
+
+class ExamEnv(gym.Env):
+    metadata = {"render_modes": ["rgb_array"]}
+
+    def __init__(
+        self,
+        exam: str | Path | Exam,
+        row: int | None = None,
+        trial: int | None = None,
+        face: str = "task",
+        variant: int = 0,
+        render_mode: str | None = None,
+    ) -> None:
+        self.exam = exam if isinstance(exam, Exam) else read(exam)
+        trials = self.exam.trials
+        if row is None:
+            match = trials[(trials.trial == trial) & (trials.face == face) & (trials.variant == variant)]
+            if match.empty:
+                raise ValueError(f"the exam has no rollout trial={trial} face={face} variant={variant}")
+            self.row = match.iloc[0]
+        else:
+            self.row = trials[trials["row"] == row].iloc[0]
+        self.episode = EpisodeSpec.from_json(self.row["spec"])
+        self.render_mode = render_mode
+        size = self.episode.sim.image_size
+        self.observation_space = spaces.Dict(
+            {
+                **{f"observation.images.{c}": spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
+                "observation.state": spaces.Box(-np.inf, np.inf, (16,), np.float32),
+            }
+        )
+        self.action_space = spaces.Box(
+            np.append(JOINT_LOW, -1.0).astype(np.float32), np.append(JOINT_HIGH, 1.0).astype(np.float32)
+        )
+        self.scene = scene_for(self.episode.assets)
+        self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
+        self._t = 0
+        self._start: dict = {}
+
+    def _obs(self) -> dict:
+        obs = observe(self.scene, self.cameras, self.row["instruction"], bool(self.row["occluded"]))
+        obs.pop("task")
+        return obs
+
+    def _info(self) -> dict:
+        return {
+            "instruction": self.row["instruction"],
+            "row": int(self.row["row"]),
+            "face": self.row["face"],
+            "target": self.row["target"],
+            "program": self.row["program"],
+            "max_steps": int(self.row["max_steps"]),
+            "ee": self.scene.ee_pos(),
+            "objects": self.scene.positions(),
+        }
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
+        super().reset(seed=seed)
+        self.scene.reset(self.episode)
+        self.scene.set_physics_state(np.asarray(self.row["initial_state"]))
+        self._t = 0
+        self._start = self.scene.positions()
+        return self._obs(), self._info()
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        valid, problem = check_action(action)
+        if problem:
+            raise ValueError(problem)
+        self.scene.step(valid)
+        self._t += 1
+        outcome = Outcome(self._start, self.scene.positions(), tuple(self.scene.ee_pos()))
+        done = achieved(self.episode, outcome, self.row["target"], self.row["program"])
+        info = {**self._info(), "achieved": done}
+        return self._obs(), float(done), False, self._t >= int(self.row["max_steps"]), info
+
+    def render(self) -> np.ndarray:
+        return self.cameras.render()[self.episode.sim.cameras[0]].copy()
+
+    def close(self) -> None:
+        self.cameras.close()
+
+
+gym.register(id="deconfound/Exam-v0", entry_point="eval.env:ExamEnv")

@@ -1,0 +1,160 @@
+"""Policies that can take an exam: observation dict + instruction in, action out.
+
+Every policy has `name`, `needs_images` (the runner renders cameras only for those that read
+them), `reset(context)` at the start of each rollout and `act(observation)`, which returns an
+8-vector (joint-position targets 1-7, gripper -1 open / +1 closed) or None to end the rollout.
+The observation holds `observation.images.<camera>` (H, W, 3 uint8; all zeros on the occ face;
+absent when the policy reads no images), `observation.state` (16 float32) and `task` (the
+instruction).
+
+Reference policies validate the instrument and read the answer key in the context, which a
+learned policy must ignore:
+* `oracle` — plans the asked-for demonstration from the spec (the positive control; it reads
+  no camera, so blanking them cannot hurt it);
+* `position` — picks up whatever stands nearest the referent's canonical slot (the shortcut);
+* `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+import referents
+from gen.spec import EpisodeSpec, TaskSpec
+
+ACTION_SIZE = 8
+# Panda joint ranges (robosuite's model), for the random walk.
+JOINT_LOW = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973])
+JOINT_HIGH = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973])
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a rollout starts from. `instruction` is all a learned policy may use; the rest is
+    the answer key for reference policies."""
+
+    spec: EpisodeSpec
+    instruction: str
+    target: str
+    program: str
+    seed: int
+
+
+class Policy(Protocol):
+    name: str
+    needs_images: bool
+
+    def reset(self, context: Context) -> None: ...
+
+    def act(self, observation: dict) -> np.ndarray | None: ...
+
+
+class PolicyError(RuntimeError):
+    """A policy cannot be made or reached (e.g. its server is down); the message says why."""
+
+
+class Scripted:
+    """Replays an oracle demonstration planned at reset on a private copy of the scene."""
+
+    needs_images = False
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._actions: list[np.ndarray] = []
+        self._t = 0
+        self._planner: dict = {}
+
+    def _plan(self, spec: EpisodeSpec, demo) -> list[np.ndarray]:  # noqa: ANN001
+        from oracle.episode import demonstrate
+        from oracle.ik import ArmIK
+        from oracle.scene import Scene
+
+        if spec.assets not in self._planner:  # a private scene: the runner's stays untouched
+            self._planner[spec.assets] = (Scene(spec.assets), ArmIK(np.asarray(spec.sim.robot_home)))
+        scene, ik = self._planner[spec.assets]
+        return list(demonstrate(scene, ik, spec, demo).actions)
+
+    def act(self, observation: dict) -> np.ndarray | None:
+        if self._t >= len(self._actions):
+            return None
+        self._t += 1
+        return self._actions[self._t - 1]
+
+
+class Oracle(Scripted):
+    def __init__(self) -> None:
+        super().__init__("oracle")
+
+    def reset(self, context: Context) -> None:
+        spec = context.spec
+        asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
+        self._actions, self._t = self._plan(asked, referents.load(spec.referent).demo), 0
+
+
+class Position(Scripted):
+    def __init__(self) -> None:
+        super().__init__("position")
+
+    def reset(self, context: Context) -> None:
+        spec = context.spec
+        layout = referents.load(spec.referent).config.layout
+        x, y = layout.slots[layout.canonical_slot]
+        nearest = min(spec.objects, key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
+        chosen = dataclasses.replace(spec, target=nearest.id, task=TaskSpec(program="pick"))
+
+        def pick(skills, s: EpisodeSpec) -> None:  # noqa: ANN001
+            skills.grasp(s.target)
+            skills.lift()
+
+        self._actions, self._t = self._plan(chosen, pick), 0
+
+
+class Nothing:
+    name = "nothing"
+    needs_images = False
+
+    def reset(self, context: Context) -> None:
+        self._hold = np.array([*context.spec.sim.robot_home, -1.0], np.float32)
+
+    def act(self, observation: dict) -> np.ndarray:
+        return self._hold
+
+
+class Random:
+    """Joint targets wander from home by a seeded random walk; the gripper toggles at random."""
+
+    name = "random"
+    needs_images = False
+
+    def reset(self, context: Context) -> None:
+        self._rng = np.random.default_rng(context.seed)
+        self._q = np.asarray(context.spec.sim.robot_home, float).copy()
+        self._gripper = -1.0
+
+    def act(self, observation: dict) -> np.ndarray:
+        self._q = np.clip(self._q + self._rng.normal(0.0, 0.05, 7), JOINT_LOW, JOINT_HIGH)
+        if self._rng.random() < 0.05:
+            self._gripper = -self._gripper
+        return np.array([*self._q, self._gripper], np.float32)
+
+
+REFERENCE = {"oracle": Oracle, "position": Position, "nothing": Nothing, "random": Random}
+
+
+def make(name: str) -> Policy:
+    """`oracle`, `position`, `nothing`, `random`, `remote:HOST:PORT` or `ckpt:PATH`."""
+    if name in REFERENCE:
+        return REFERENCE[name]()
+    if name.startswith("remote:"):
+        from eval.remote import RemotePolicy
+
+        return RemotePolicy(name.removeprefix("remote:"))
+    if name.startswith("ckpt:"):
+        from train.policy import CheckpointPolicy
+
+        return CheckpointPolicy(name.removeprefix("ckpt:"))
+    raise PolicyError(f"unknown policy {name!r}; use {', '.join(REFERENCE)}, remote:HOST:PORT or ckpt:PATH")

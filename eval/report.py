@@ -1,0 +1,142 @@
+"""The battery's report as files: report.json (schema in eval/score.py), report.md (tables) and
+report.html (the same tables with plots: rates with interval bars, a per-slot heat map and
+distance histograms)."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense")
+
+
+def _pct(r: dict) -> str:
+    return f"{r['rate']:.1%} ({r['k']}/{r['n']}, CI {r['ci'][0]:.1%}–{r['ci'][1]:.1%})" if r["n"] else "— (n=0)"
+
+
+def markdown(report: dict) -> str:
+    faces = report["faces"]
+    lines = [
+        f"# Battery report: `{report['policy']}` on `{report['exam']}`",
+        "",
+        f"{report['rollouts']} rollouts over {report['trials']} trials. "
+        + (
+            "Init-value check passed: a do-nothing rollout scores 0 on every face."
+            if report["init_value"]["trusted"]
+            else f"**Init-value check FAILED** ({report['init_value']['faces']}): do not trust these rates."
+        ),
+        "",
+        "| face | rate (k/n, 95% Wilson CI) | chance |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {f} | {_pct(faces[f])} | {faces[f]['chance']:.0%} |" for f in FACE_ORDER if f in faces]
+    d = report["distances"]
+    if d["n"]:
+        lines += [
+            "",
+            f"Swap rollouts: median closest approach to the named object {d['median_to_named'] * 100:.1f} cm, to the original "
+            f"{d['median_to_original'] * 100:.1f} cm; {d['grazing']}/{d['n']} in the 2–5 cm grazing band.",
+            "",
+            "| landing threshold | obeyed name | true target |",
+            "|---|---|---|",
+        ]
+        lines += [
+            f"| {float(t) * 100:.0f} cm | {_pct(r['obeyed_name'])} | {_pct(r['true_target'])} |"
+            for t, r in d["by_threshold"].items()
+        ]
+        lines.append(f"\nVerdict {'does not depend' if d['threshold_robust'] else '**depends**'} on the threshold.")
+    lines += [
+        "",
+        "## Reach probe on failures",
+        "",
+        "| face | reached target | went to a distractor | neither |",
+        "|---|---|---|---|",
+    ]
+    lines += [
+        f"| {f} | {p['reached_target']} | {p['went_distractor']} | {p['neither']} |" for f, p in report["reach_probe"].items()
+    ]
+    for title, key in (("Per slot (of the object asked for)", "per_slot"), ("Per object", "per_object")):
+        lines += ["", f"## {title}", "", "| | task | obeyed name |", "|---|---|---|"]
+        for value, r in report[key].items():
+            lines.append(
+                f"| {value} | {_pct(r['task']) if 'task' in r else '—'} "
+                f"| {_pct(r['obeyed_name']) if 'obeyed_name' in r else '—'} |"
+            )
+    if report["errors"]:
+        lines += ["", f"## Broken rollouts ({len(report['errors'])}, counted as failures)", ""]
+        lines += [f"- row {e['row']}: {e['error']}" for e in report["errors"][:50]]
+    return "\n".join(lines) + "\n"
+
+
+def _png(fig: plt.Figure) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def plots(report: dict) -> list[str]:
+    faces = [f for f in FACE_ORDER if f in report["faces"]]
+    rates = [report["faces"][f]["rate"] or 0.0 for f in faces]
+    lo = [r - report["faces"][f]["ci"][0] for f, r in zip(faces, rates)]
+    hi = [report["faces"][f]["ci"][1] - r for f, r in zip(faces, rates)]
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.bar(faces, rates, yerr=[lo, hi], capsize=4, color="#4a7fb5")
+    for i, f in enumerate(faces):
+        ax.hlines(report["faces"][f]["chance"], i - 0.4, i + 0.4, colors="#c0392b", linestyles="dashed")
+    ax.set_ylim(0, 1.05)
+    ax.tick_params(axis="x", labelrotation=20)
+    ax.set_ylabel("rate (95% Wilson CI)")
+    ax.set_title(f"{report['policy']}: rates per face (dashed: chance)")
+    images = [_png(fig)]
+    slots = list(report["per_slot"])
+    if slots:
+        cols = ["task", "obeyed_name"]
+        grid = np.array([[report["per_slot"][s].get(c, {}).get("rate") or np.nan for c in cols] for s in slots], float)
+        fig, ax = plt.subplots(figsize=(3.6, 0.35 * len(slots) + 1.2))
+        im = ax.imshow(grid, cmap="viridis", vmin=0, vmax=1, aspect="auto")
+        ax.set_xticks(range(len(cols)), cols)
+        ax.set_yticks(range(len(slots)), [f"slot {s}" for s in slots])
+        for (i, j), v in np.ndenumerate(grid):
+            if not np.isnan(v):
+                ax.text(j, i, f"{v:.0%}", ha="center", va="center", color="white" if v < 0.6 else "black", fontsize=8)
+        fig.colorbar(im, ax=ax, fraction=0.05)
+        ax.set_title("per slot")
+        images.append(_png(fig))
+    d = report["distances"]
+    if d["n"]:
+        fig, ax = plt.subplots(figsize=(7, 3))
+        bins = np.linspace(0, max(0.3, max(d["to_named"] + d["to_original"])), 40)
+        ax.hist(np.array(d["to_named"]), bins=bins, alpha=0.6, label="to the newly named object")
+        ax.hist(np.array(d["to_original"]), bins=bins, alpha=0.6, label="to the original target")
+        for t in d["by_threshold"]:
+            ax.axvline(float(t), color="k", linestyle=":")
+        ax.set_xlabel("closest end-effector approach on swap rollouts (m)")
+        ax.legend()
+        images.append(_png(fig))
+    return images
+
+
+def html(report: dict) -> str:
+    body = "".join(f'<p><img src="data:image/png;base64,{img}"></p>' for img in plots(report))
+    rows = markdown(report)
+    return (
+        "<!doctype html><html><head><meta charset='utf-8'><title>battery report</title>"
+        "<style>body{font-family:sans-serif;max-width:900px;margin:2em auto}pre{white-space:pre-wrap}</style></head><body>"
+        f"<h1>{report['policy']} on {report['exam']}</h1>{body}<pre>{rows}</pre></body></html>"
+    )
+
+
+def write_reports(out: Path, report: dict) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "report.json").write_text(json.dumps(report, indent=2))
+    (out / "report.md").write_text(markdown(report))
+    (out / "report.html").write_text(html(report))

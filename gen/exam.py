@@ -1,0 +1,185 @@
+"""The exam format: `exam.json` + `trials.parquet`, readable without this package.
+
+An exam is made from the same specs as a dataset, on the held-out `exam` random stream (its
+scene hashes never occur in a training split). Every trial is a scene the oracle solved, and
+each row of `trials.parquet` is one rollout to run from that scene's initial state:
+
+| face | instruction | asks for | cameras |
+|---|---|---|---|
+| `task` | the original | the original target/program | on |
+| `swap` | one word changed, once per alternative (the decoy rotates over every non-target) | the decoy | on |
+| `occ` | the original | the original | blanked (all zeros) |
+| `nonsense` | `xxx` | the original | on |
+
+Columns of trials.parquet:
+  row (int, unique), trial (int), face (str), variant (int: 0 for task/occ/nonsense, 1.. for
+  swaps), instruction (str), target (str: the object asked for), program (str: pick | push |
+  place), original_target (str), original_program (str), occluded (bool), spec (JSON: the
+  trial's episode spec, see gen/spec.py), scene_hash (str), initial_state (list[float]: MuJoCo
+  mjSTATE_INTEGRATION), max_steps (int: rollout horizon at the exam's fps), alternatives (JSON:
+  `[{"target", "program"}]`, the original first: what the instruction chooses among), slot
+  (int: slot of the object asked for), value (str: what the instruction calls it).
+
+exam.json holds the format name and version, the faces, the scoring parameters, the
+observation/action conventions, the geometry of every object kind (to score logs without the
+simulator), the referent spec and the plan's confound audit.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from gen import __version__, parquet
+from gen.spec import EpisodeSpec, SpecError
+from oracle import catalog, success
+from referents.base import Alternative
+
+EXAM_FORMAT = "deconfound-exam"
+EXAM_VERSION = 1
+NONSENSE = "xxx"
+FACES = {
+    "task": "original instruction; success = the program's predicate on the original target",
+    "swap": "one word changed to name another alternative; obeyed = the rollout lands on the newly named one",
+    "occ": "original instruction, cameras blanked; success must collapse for a policy that reads its cameras",
+    "nonsense": f"instruction replaced by {NONSENSE!r}; a grounded policy should fail",
+}
+REACH_THRESHOLDS = (0.02, 0.05)
+LANDING = 0.05  # closest approach (m) at which a rollout counts as landing on an alternative
+COLUMNS = (
+    "row", "trial", "face", "variant", "instruction", "target", "program", "original_target", "original_program",
+    "occluded", "spec", "scene_hash", "initial_state", "max_steps", "alternatives", "slot", "value",
+)  # fmt: skip
+
+
+class ExamError(ValueError):
+    """An exam folder is missing, corrupt or of another version; the message says which."""
+
+
+def scoring() -> dict[str, Any]:
+    return {
+        "lift_margin": "per trial: spec.task.lift_margin",
+        "push_margin": success.PUSH_MARGIN,
+        "push_direction": list(success.PUSH_DIRECTION),
+        "slide_max_rise": success.SLIDE_MAX_RISE,
+        "place_max_hover": success.PLACE_MAX_HOVER,
+        "landing_threshold": LANDING,
+        "reach_thresholds": list(REACH_THRESHOLDS),
+        "grazing_band": list(REACH_THRESHOLDS),
+        "contact_point": "pick/push: the object's grasp point (top centre minus grasp_depth); place: the destination's "
+        "top centre raised by the carried object's height minus its grasp_depth",
+    }
+
+
+def geometry() -> dict[str, dict[str, Any]]:
+    return {
+        k.name: {"size": list(k.size), "bottom": k.bottom, "grasp_depth": k.grasp_depth(), "inner": k.inner}
+        for k in catalog.KINDS.values()
+    }
+
+
+def trial_rows(
+    trial: int, spec: EpisodeSpec, alternatives: list[Alternative], initial_state: list[float], max_steps: int
+) -> list[dict]:
+    """The rollouts of one trial: task, a swap per alternative, occ, nonsense."""
+    objects = {o.id for o in spec.objects}
+    values = {((a.id, spec.task.program) if a.id in objects else (spec.target, a.id)): a.value for a in alternatives}
+    original = {"target": spec.target, "program": spec.task.program}
+    alternatives = [original] + [{"target": t, "program": p} for t, p in (spec.choice(c) for c in spec.counterfactuals)]
+    common = {
+        "trial": trial,
+        "original_target": spec.target,
+        "original_program": spec.task.program,
+        "spec": spec.to_json(),
+        "scene_hash": spec.scene_hash,
+        "initial_state": initial_state,
+        "max_steps": max_steps,
+        "alternatives": json.dumps(alternatives),
+    }
+
+    def row(face: str, variant: int, instruction: str, target: str, program: str, occluded: bool = False) -> dict:
+        value = values.get((target, program), target)
+        return {**common, "face": face, "variant": variant, "instruction": instruction, "target": target,
+                "program": program, "occluded": occluded, "slot": spec.object(target).slot, "value": value}  # fmt: skip
+
+    rows = [row("task", 0, spec.instruction, spec.target, spec.task.program)]
+    for i, cf in enumerate(spec.counterfactuals, start=1):
+        rows.append(row("swap", i, cf.instruction, *spec.choice(cf)))
+    rows.append(row("occ", 0, spec.instruction, spec.target, spec.task.program, occluded=True))
+    rows.append(row("nonsense", 0, NONSENSE, spec.target, spec.task.program))
+    return rows
+
+
+def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
+    for i, r in enumerate(rows):
+        r["row"] = i
+    table = pa.Table.from_pylist([{c: r[c] for c in COLUMNS} for r in rows])
+    pq.write_table(table, root / "trials.parquet")
+    header = {
+        "format": EXAM_FORMAT,
+        "version": EXAM_VERSION,
+        "trials": len({r["trial"] for r in rows}),
+        "rollouts": len(rows),
+        "faces": FACES,
+        "scoring": scoring(),
+        "geometry": geometry(),
+        "created_with": {
+            "generator": __version__,
+            "mujoco": metadata.version("mujoco"),
+            "robosuite": metadata.version("robosuite"),
+        },
+        **meta,
+    }
+    (root / "exam.json").write_text(json.dumps(header, indent=2, default=str))
+
+
+@dataclass
+class Exam:
+    root: Path
+    meta: dict[str, Any]
+    trials: pd.DataFrame
+
+    @property
+    def name(self) -> str:
+        return f"{self.meta['referent']}-exam/seed{self.meta.get('seed', '?')}/{self.meta['trials']}trials"
+
+    def spec(self, row: pd.Series) -> EpisodeSpec:
+        return EpisodeSpec.from_json(row["spec"])
+
+
+def read(root: Path | str) -> Exam:
+    """Load and validate an exam folder; any problem raises ExamError with one line."""
+    root = Path(root)
+    try:
+        meta = json.loads((root / "exam.json").read_text())
+    except FileNotFoundError:
+        raise ExamError(f"{root} is not an exam: no exam.json") from None
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ExamError(f"{root}/exam.json is corrupt: {exc}") from None
+    if not isinstance(meta, dict) or meta.get("format") != EXAM_FORMAT:
+        raise ExamError(f"{root}/exam.json is not a {EXAM_FORMAT} file")
+    if meta.get("version") != EXAM_VERSION:
+        raise ExamError(f"{root}: exam format version {meta.get('version')} is not supported (this reader: {EXAM_VERSION})")
+    try:
+        trials = parquet.read(root / "trials.parquet")
+    except FileNotFoundError:
+        raise ExamError(f"{root} has no trials.parquet") from None
+    except Exception as exc:  # pyarrow raises several types for damaged files
+        raise ExamError(f"{root}/trials.parquet is corrupt: {type(exc).__name__}: {exc}") from None
+    missing = [c for c in COLUMNS if c not in trials.columns]
+    if missing:
+        raise ExamError(f"{root}/trials.parquet lacks columns {missing}")
+    if len(trials) != meta.get("rollouts") or trials["trial"].nunique() != meta.get("trials"):
+        raise ExamError(f"{root}: trials.parquet holds {len(trials)} rollouts, exam.json says {meta.get('rollouts')}")
+    try:
+        EpisodeSpec.from_json(trials["spec"].iloc[0])
+    except SpecError as exc:
+        raise ExamError(f"{root}: {exc}") from None
+    return Exam(root, meta, trials.sort_values("row").reset_index(drop=True))

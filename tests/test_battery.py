@@ -1,0 +1,185 @@
+"""Exams and the counterfactual battery: held-out scenes, a self-contained format, reference
+policies that rank as the instrument demands, one scorer for online and offline logs, and
+clear failures for bad exams, bad actions and unreachable servers."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import make_dataset
+
+import referents
+from eval.__main__ import take
+from eval.policies import Context, make
+from eval.rollout import Runner
+from gen import parquet, scenes
+from gen.exam import read
+from gen.plan import plan
+from gen.spec import SimSettings
+
+
+@pytest.fixture(scope="module")
+def small_exam(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return make_dataset(
+        tmp_path_factory.mktemp("exam") / "object-exam", "referent=object", "n=6", "split=exam", "seed=7", "image_size=64"
+    )
+
+
+def test_exam_scenes_never_occur_in_training(small_exam: Path, object_dataset: Path) -> None:
+    exam_hashes = set(parquet.read(small_exam / "trials.parquet")["scene_hash"])
+    assert exam_hashes.isdisjoint(set(scenes.read(object_dataset)["scene_hash"]))
+    ref = referents.load("object")
+    train = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings())}
+    held_out = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings(), split="exam")}
+    assert train.isdisjoint(held_out)
+
+
+def test_exam_format_reads_without_our_code(small_exam: Path) -> None:
+    meta = json.loads((small_exam / "exam.json").read_text())
+    trials = parquet.read(small_exam / "trials.parquet")
+    assert meta["format"] == "deconfound-exam" and meta["version"] == 1
+    assert {"scoring", "geometry", "faces", "observation", "audit"} <= set(meta)
+    assert meta["trials"] == 6 and meta["rollouts"] == len(trials)
+    for _, t in trials.groupby("trial"):
+        alternatives = json.loads(t["alternatives"].iloc[0])
+        assert sorted(t["face"]) == sorted(["task", "occ", "nonsense"] + ["swap"] * (len(alternatives) - 1))
+        swaps = t[t.face == "swap"]
+        assert {(r.target, r.program) for r in swaps.itertuples()} == {(a["target"], a["program"]) for a in alternatives[1:]}
+        assert (t[t.face == "nonsense"].instruction == "xxx").all() and t[t.face == "occ"].occluded.all()
+        assert len(set(t["initial_state"].map(tuple))) == 1 and len(t["initial_state"].iloc[0]) > 50
+
+
+def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pytest.TempPathFactory) -> None:
+    exam = read(
+        make_dataset(tmp_path_factory.mktemp("exam40") / "object-exam", "referent=object", "n=40", "split=exam", "seed=3")
+    )
+    out = tmp_path_factory.mktemp("runs")
+    reports = {p: take(exam, exam.trials, make(p), out / p)[0] for p in ("oracle", "position", "nothing")}
+    oracle, position, nothing = reports["oracle"]["faces"], reports["position"]["faces"], reports["nothing"]["faces"]
+    assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["true_target"]["rate"] <= 0.05
+    assert oracle["task"]["rate"] >= 0.95
+    # the oracle reads the spec, not the cameras: blanking them cannot hurt it (README: what occ proves)
+    assert oracle["occ"]["rate"] == oracle["task"]["rate"]
+    lo, hi = position["obeyed_name"]["ci"]
+    assert lo <= position["obeyed_name"]["chance"] <= hi
+    assert all(f["k"] == 0 for f in nothing.values())
+    assert all(r["init_value"]["trusted"] for r in reports.values())
+    assert reports["oracle"]["distances"]["median_to_named"] < 0.02 < reports["oracle"]["distances"]["median_to_original"]
+
+
+def test_offline_scorer_gives_the_identical_report(small_exam: Path, tmp_path: Path) -> None:
+    exam = read(small_exam)
+    take(exam, exam.trials, make("position"), tmp_path / "online")
+    offline = tmp_path / "offline"
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "eval.score",
+            f"exam={small_exam}",
+            f"logs={tmp_path / 'online/rollouts.parquet'}",
+            f"out={offline}",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr
+    assert (offline / "report.json").read_bytes() == (tmp_path / "online/report.json").read_bytes()
+    assert (offline / "report.html").stat().st_size > 10_000  # three embedded plots
+
+
+class Broken:
+    """A policy that misbehaves on purpose: NaN on even rows, a wrong shape on odd ones."""
+
+    name = "broken"
+    needs_images = True
+
+    def reset(self, context: Context) -> None:
+        self.row = context.seed
+
+    def act(self, observation: dict) -> np.ndarray:
+        assert observation["observation.images.agentview"].shape == (64, 64, 3)
+        return np.full(8, np.nan) if self.row % 2 == 0 else np.zeros(3)
+
+
+def test_bad_actions_fail_their_trial_and_the_run_goes_on(small_exam: Path, tmp_path: Path) -> None:
+    exam = read(small_exam)
+    rows = exam.trials.head(4)
+    report, _ = take(exam, rows, Broken(), tmp_path)
+    errors = {e["row"]: e["error"] for e in report["errors"]}
+    assert len(errors) == 4
+    assert "NaN" in errors[0] and "shape (3,)" in errors[1]
+    assert report["faces"]["task"]["k"] == 0
+    occluded = exam.trials[exam.trials.face == "occ"].iloc[0]
+    assert Runner(make("nothing")).run(occluded).error is None
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "eval", *args], capture_output=True, text=True)
+
+
+def test_bad_exams_and_servers_get_one_line(small_exam: Path, tmp_path: Path) -> None:
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "exam.json").write_text("{not json")
+    future = tmp_path / "future"
+    future.mkdir()
+    meta = json.loads((small_exam / "exam.json").read_text())
+    (future / "exam.json").write_text(json.dumps({**meta, "version": 99}))
+    for args, needle in [
+        ((f"exam={broken}", "policy=oracle"), "exam.json is corrupt"),
+        ((f"exam={future}", "policy=oracle"), "version 99 is not supported"),
+        ((f"exam={tmp_path}", "policy=oracle"), "no exam.json"),
+        ((f"exam={small_exam}", "policy=remote:127.0.0.1:9"), "unreachable"),
+        ((f"exam={small_exam}", "policy=telepathy"), "unknown policy"),
+    ]:
+        result = _cli(*args)
+        assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1 and needle in result.stderr, result.stderr
+
+
+def test_remote_policy_over_the_openpi_protocol(small_exam: Path, tmp_path: Path) -> None:
+    from openpi_client import msgpack_numpy
+    from websockets.sync.server import serve
+
+    seen: list[dict] = []
+
+    def handler(ws) -> None:  # noqa: ANN001
+        ws.send(msgpack_numpy.Packer().pack({"server": "test"}))
+        for message in ws:
+            obs = msgpack_numpy.unpackb(message)
+            seen.append(obs)
+            home = np.array([0.0, 0.19634954, 0.0, -2.61799388, 0.0, 2.94159265, 0.78539816, -1.0], np.float32)
+            ws.send(msgpack_numpy.Packer().pack({"actions": np.tile(home, (10, 1))}))
+
+    with serve(handler, "127.0.0.1", 0) as server:
+        port = server.socket.getsockname()[1]
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+        exam = read(small_exam)
+        report, _ = take(exam, exam.trials.head(3), make(f"remote:127.0.0.1:{port}"), tmp_path)
+        server.shutdown()
+    assert not report["errors"] and report["faces"]["task"]["k"] == 0
+    assert seen[0]["prompt"] == exam.trials.iloc[0]["instruction"]
+    assert seen[0]["observation.images.wrist"].shape == (64, 64, 3) and seen[0]["observation.state"].shape == (16,)
+
+
+def test_gym_environment_replays_a_trial(small_exam: Path) -> None:
+    import gymnasium as gym
+
+    exam = read(small_exam)
+    row = exam.trials[(exam.trials.trial == 1) & (exam.trials.face == "swap")].iloc[0]
+    oracle = make("oracle")
+    oracle.reset(Context(exam.spec(row), row["instruction"], row["target"], row["program"], 0))
+    env = gym.make("eval.env:deconfound/Exam-v0", exam=small_exam, row=int(row["row"]), disable_env_checker=True)
+    obs, info = env.reset()
+    assert info["instruction"] == row["instruction"] and obs["observation.images.agentview"].shape == (64, 64, 3)
+    reward = 0.0
+    while (action := oracle.act({})) is not None:
+        obs, reward, terminated, truncated, info = env.step(action)
+    assert reward == 1.0 and info["achieved"]
+    env.close()
