@@ -109,3 +109,13 @@ class Runner:
     def close(self) -> None:
         for cams in self._cameras.values():
             cams.close()
+
+
+def run_chunk(policy_name: str, rows: pd.DataFrame) -> list[dict]:
+    """A worker process's share of an exam: its own policy, scenes and renderers."""
+    from eval.policies import make
+
+    runner = Runner(make(policy_name))
+    logs = [runner.run(row).to_row() for _, row in rows.iterrows()]
+    runner.close()
+    return logs

@@ -60,7 +60,9 @@ def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pyt
         make_dataset(tmp_path_factory.mktemp("exam40") / "object-exam", "referent=object", "n=40", "split=exam", "seed=3")
     )
     out = tmp_path_factory.mktemp("runs")
-    reports = {p: take(exam, exam.trials, make(p), out / p)[0] for p in ("oracle", "position", "nothing")}
+    reports = {
+        p: take(exam, exam.trials, make(p), out / p, workers=2, policy_name=p)[0] for p in ("oracle", "position", "nothing")
+    }
     oracle, position, nothing = reports["oracle"]["faces"], reports["position"]["faces"], reports["nothing"]["faces"]
     assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["true_target"]["rate"] <= 0.05
     assert oracle["task"]["rate"] >= 0.95
