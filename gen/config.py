@@ -44,6 +44,8 @@ class GenConfig:
     distractor_only: Optional[List[str]] = None  # values that appear but are never the target
     targets: Optional[List[str]] = None  # the only values that may be the target (e.g. held-out ones in an exam)
     split: str = "train"  # train: a LeRobot dataset; exam: an exam (held-out random stream, no video)
+    workers: Optional[int] = None  # processes producing episodes; default: this machine's cores
+    backend: str = "process"  # process (this machine) | ray (Ray tasks; RAY_ADDRESS selects a cluster)
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
 
 
@@ -90,6 +92,12 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"split must be train or exam, got {cfg.split!r}")
     if cfg.split == "exam" and cfg.plan_only:
         raise UserError("plan_only=true and split=exam do not combine: an exam is already simulation-free to read")
+    if cfg.workers is None:
+        cfg.workers = os.cpu_count() or 1
+    if cfg.workers < 1:
+        raise UserError(f"workers must be at least 1, got {cfg.workers}")
+    if cfg.backend not in ("process", "ray"):
+        raise UserError(f"backend must be process or ray, got {cfg.backend!r}")
     if cfg.max_attempts < 1:
         raise UserError(f"max_attempts must be at least 1, got {cfg.max_attempts}")
     if cfg.objects_per_scene is not None and cfg.objects_per_scene < 1:

@@ -64,16 +64,20 @@ class Summary:
         )
 
 
-def load_referent(cfg: GenConfig) -> Referent:
-    overrides = {
+def overrides(cfg: GenConfig) -> dict:
+    """Options that edit the referent spec."""
+    return {
         "objects_per_scene": cfg.objects_per_scene,
         "holdout": cfg.holdout,
         "distractor_only": cfg.distractor_only,
         "targets": cfg.targets,
         "confound": cfg.confound,
     }
+
+
+def load_referent(cfg: GenConfig) -> Referent:
     try:
-        return referents.load(cfg.referent, cfg.spec, overrides)
+        return referents.load(cfg.referent, cfg.spec, overrides(cfg))
     except (UnknownReferent, ReferentSpecError) as exc:
         raise UserError(str(exc)) from None
 
@@ -144,23 +148,27 @@ def _simulate(
     from tqdm import tqdm
 
     from gen.lerobot_writer import Layout, LeRobotWriter
-    from gen.produce import DemoFailed, Producer
+    from gen.produce import DemoFailed
+    from gen.workers import Job, WorkerCrash, produce
 
     writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
-    producer = Producer(referent, sim, cfg.codec)
+    job = Job(cfg.referent, cfg.spec, overrides(cfg), sim, cfg.codec, cfg.seed, cfg.max_attempts)
     rows, written, failed = [], [], 0
-    bar = tqdm(plan, desc=referent.name, unit="ep", disable=not progress, dynamic_ncols=True)
-    for i, design in enumerate(bar):
-        try:
-            produced = producer.produce(design, i, cfg.seed, cfg.max_attempts)
-        except DemoFailed as exc:
-            raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
-        failed += len(produced.failures)
-        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
-        written.append(produced.spec)
-        bar.set_postfix(retries=failed)
+    bar = tqdm(total=len(plan), desc=referent.name, unit="ep", disable=not progress, dynamic_ncols=True)
+    try:
+        for produced in produce(job, plan, cfg.workers or 1, cfg.backend):
+            failed += len(produced.failures)
+            rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
+            written.append(produced.spec)
+            bar.update()
+            bar.set_postfix(retries=failed)
+    except DemoFailed as exc:
+        raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
+    except WorkerCrash as exc:
+        raise UserError(str(exc)) from None
+    finally:
+        bar.close()
     writer.finalize()
-    producer.close()
     return rows, writer.frames, failed, written
 
 

@@ -1,0 +1,131 @@
+"""Producing episodes in parallel: worker processes on this machine, or Ray tasks.
+
+Every episode depends on (design, index, seed) alone, and each worker encodes its own video,
+so the dataset is byte-identical whatever the number of workers or the backend. Results come
+back in episode order; the writer (in the calling process) only ever sees whole, verified
+episodes. A worker that dies mid-episode loses nothing that was written: its unfinished
+episodes are redone by a fresh pool, and the run stops with a clear error if crashes repeat.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+from gen.produce import Produced, Producer
+from gen.spec import SimSettings
+from referents.base import Design
+
+MAX_POOL_RESTARTS = 2
+
+
+class WorkerCrash(RuntimeError):
+    """Worker processes kept dying; the message says how often and on which episode."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a worker needs to build its own Producer: how to load the referent, and the sim."""
+
+    referent: str
+    spec_path: str | None
+    overrides: dict[str, Any]
+    sim: SimSettings
+    codec: str
+    seed: int
+    max_attempts: int
+    split: str = "train"
+
+    def producer(self) -> Producer:
+        import referents
+
+        return Producer(referents.load(self.referent, self.spec_path, self.overrides), self.sim, self.codec)
+
+
+_producer: Producer | None = None  # one per worker process
+_job: Job | None = None
+
+
+def _init(job: Job) -> None:
+    global _producer, _job
+    _producer, _job = job.producer(), job
+
+
+def _produce(index: int, design: Design) -> Produced:
+    assert _producer is not None and _job is not None
+    return _producer.produce(design, index, _job.seed, _job.max_attempts)
+
+
+def produce(job: Job, plan: list[Design], workers: int = 1, backend: str = "process", start: int = 0) -> Iterator[Produced]:
+    """Produced episodes `start`, `start + 1`, ... of `plan`, in order."""
+    if backend == "ray":
+        yield from _ray(job, plan, workers, start)
+    elif workers <= 1:
+        _init(job)
+        try:
+            for i in range(start, len(plan)):
+                yield _produce(i, plan[i])
+        finally:
+            assert _producer is not None
+            _producer.close()
+    else:
+        yield from _processes(job, plan, workers, start)
+
+
+def _processes(job: Job, plan: list[Design], workers: int, start: int) -> Iterator[Produced]:
+    next_index, restarts = start, 0
+    while next_index < len(plan):
+        context = multiprocessing.get_context("spawn")
+        with cf.ProcessPoolExecutor(workers, mp_context=context, initializer=_init, initargs=(job,)) as pool:
+            window: dict[int, cf.Future] = {}
+            submitted = next_index
+            try:
+                while next_index < len(plan):
+                    while submitted < len(plan) and len(window) < 2 * workers:
+                        window[submitted] = pool.submit(_produce, submitted, plan[submitted])
+                        submitted += 1
+                    produced = window.pop(next_index).result()
+                    next_index += 1
+                    yield produced
+            except cf.process.BrokenProcessPool:
+                restarts += 1
+                if restarts > MAX_POOL_RESTARTS:
+                    raise WorkerCrash(
+                        f"a worker process died {restarts} times (last while producing episode {next_index}); "
+                        "nothing unfinished was written"
+                    ) from None
+                for future in window.values():
+                    future.cancel()
+
+
+def _ray(job: Job, plan: list[Design], workers: int, start: int) -> Iterator[Produced]:
+    import ray
+    from ray.util import ActorPool
+
+    if not ray.is_initialized():
+        address = os.environ.get("RAY_ADDRESS")
+        ray.init(
+            address=address,
+            num_cpus=None if address else workers,
+            include_dashboard=False,
+            log_to_driver=False,
+            configure_logging=False,
+        )
+
+    @ray.remote
+    class Worker:
+        def __init__(self, job: Job) -> None:
+            _init(job)
+
+        def produce(self, index: int, design: Design) -> Produced:
+            return _produce(index, design)
+
+    pool = ActorPool([Worker.remote(job) for _ in range(max(1, workers))])  # type: ignore[attr-defined]
+    try:
+        yield from pool.map(lambda actor, item: actor.produce.remote(*item), [(i, plan[i]) for i in range(start, len(plan))])
+    except ray.exceptions.RayActorError as exc:
+        raise WorkerCrash(f"a Ray worker died ({exc.__class__.__name__}); nothing unfinished was written") from None
