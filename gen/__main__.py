@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import sys
 
-from gen.config import GenConfig, UserError, parse
+from gen.cli import UserError, usage
+from gen.config import GenConfig, parse
 
-USAGE = "usage: python -m gen [key=value ...]\n\noptions (default):\n" + "\n".join(
-    f"  {name}={field.default}" for name, field in GenConfig.__dataclass_fields__.items()
-)
+USAGE = usage("python -m gen", GenConfig)
 
 
 def main(argv: list[str]) -> int:

@@ -1,7 +1,7 @@
-"""The generator's command line: Hydra overrides (`key=value`) over a typed config.
+"""The generator's options (`python -m gen key=value ...`) and their validation.
 
-Every problem with the input becomes a `UserError` whose message is one line naming it; the
-CLI prints that line and exits non-zero before anything is written.
+Every problem with the input becomes a `UserError` (gen/cli.py) whose message is one line
+naming it; the CLI prints that line and exits non-zero before anything is written.
 """
 
 from __future__ import annotations
@@ -12,18 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import List, Optional
 
-from hydra import compose, initialize
-from hydra.core.config_store import ConfigStore
-from hydra.errors import HydraException, OverrideParseException
-from omegaconf import OmegaConf
-from omegaconf.errors import OmegaConfBaseException
-
+from gen.cli import UserError, compose_config
 from gen.video import CODECS
 from oracle.world import MAX_IMAGE_SIZE, PHYSICS_DT
-
-
-class UserError(Exception):
-    """Bad input: the message is shown to the user as is."""
 
 
 @dataclass
@@ -49,33 +40,11 @@ class GenConfig:
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
 
 
-ConfigStore.instance().store(name="gen", node=GenConfig)
-
-
 def parse(argv: list[str]) -> GenConfig:
     """Overrides -> validated config."""
-    try:
-        with initialize(version_base=None, config_path=None):
-            cfg = compose(config_name="gen", overrides=argv)
-    except (HydraException, OmegaConfBaseException, ValueError) as exc:
-        raise UserError(_one_line(exc)) from None
-    config: GenConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
+    config: GenConfig = compose_config("gen", GenConfig, argv)
     validate(config)
     return config
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip()
-    if isinstance(exc, OverrideParseException):
-        return f"cannot parse the option {exc.override!r}: write options as key=value"
-    if "Could not override" in text or "not in struct" in text or "not in 'GenConfig'" in text:
-        key = text.split("'")[1] if "'" in text else text
-        return f"unknown option {key!r}; options: {', '.join(GenConfig.__dataclass_fields__)}"
-    cause = exc.__cause__ or exc.__context__
-    inner = cause if isinstance(cause, OmegaConfBaseException) else exc
-    key = getattr(inner, "full_key", None)
-    message = str(inner).strip().splitlines()[0] if str(inner).strip() else text.splitlines()[0]
-    return f"{key}: {message}" if key else message
 
 
 def validate(cfg: GenConfig) -> None:

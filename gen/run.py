@@ -19,7 +19,8 @@ from pathlib import Path
 import referents
 from gen import __version__, card, scenes
 from gen.audit import agree, audit
-from gen.config import GenConfig, UserError
+from gen.cli import UserError
+from gen.config import GenConfig
 from gen.plan import designs, realize
 from gen.spec import EpisodeSpec, SimSettings
 from oracle.world import ACTION_NAMES, STATE_NAMES

@@ -1,0 +1,161 @@
+"""A generated LeRobot dataset in memory, for training on a CPU.
+
+Videos are decoded once (PyAV, sequentially) into uint8 arrays and cached on disk, keyed by the
+dataset's content; decoding frame by frame through the loader would dominate every step.
+Everything a training run relies on is checked first, so a bad dataset fails in one line
+before any step is taken.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import av
+import numpy as np
+
+from gen import parquet
+
+CAMERAS = ("agentview", "wrist")
+STATE_DIM, ACTION_DIM = 16, 8
+
+
+class DatasetError(ValueError):
+    """The dataset cannot be trained on; the message says why."""
+
+
+@dataclass
+class Frames:
+    """All frames of a dataset: images per camera (N, H, W, 3) uint8, state (N, 16), action
+    (N, 8), episode index, frame index, task index per frame; tasks; episode bounds."""
+
+    images: dict[str, np.ndarray]
+    state: np.ndarray
+    action: np.ndarray
+    episode: np.ndarray
+    task: np.ndarray
+    tasks: list[str]
+    starts: np.ndarray  # first frame of each episode
+    ends: np.ndarray  # one past the last frame of each episode
+    stats: dict[str, dict[str, np.ndarray]]
+
+    @property
+    def image_size(self) -> int:
+        return self.images[CAMERAS[0]].shape[1]
+
+    def __len__(self) -> int:
+        return len(self.action)
+
+
+def check(root: Path, image_size: int | None = None) -> dict:
+    """Validate a dataset for training; returns its info.json."""
+    info_path = root / "meta/info.json"
+    if not info_path.is_file():
+        raise DatasetError(f"{root} is not a LeRobot dataset (no meta/info.json)")
+    try:
+        info = json.loads(info_path.read_text())
+    except json.JSONDecodeError as exc:
+        raise DatasetError(f"{info_path} is corrupt: {exc}") from None
+    if info.get("codebase_version") != "v3.0":
+        raise DatasetError(f"{root}: codebase_version {info.get('codebase_version')!r}; training reads v3.0 datasets")
+    features = info.get("features", {})
+    needed = {f"observation.images.{c}": None for c in CAMERAS} | {"observation.state": STATE_DIM, "action": ACTION_DIM}
+    for key, dim in needed.items():
+        if key not in features:
+            raise DatasetError(f"{root}: missing feature {key!r}; the tiny policy needs {', '.join(needed)}")
+        if dim is not None and list(features[key]["shape"]) != [dim]:
+            raise DatasetError(f"{root}: feature {key!r} has shape {features[key]['shape']}, expected [{dim}]")
+    sizes = {tuple(features[f"observation.images.{c}"]["shape"]) for c in CAMERAS}
+    if len(sizes) != 1:
+        raise DatasetError(f"{root}: cameras have different image sizes {sorted(sizes)}")
+    height, width, _ = sizes.pop()
+    if height != width:
+        raise DatasetError(f"{root}: frames are {height}x{width}; the tiny policy takes square frames")
+    if image_size is not None and image_size != height:
+        raise DatasetError(
+            f"{root}: frames are {height} px but image_size={image_size}; "
+            f"train with image_size={height} or regenerate the dataset with image_size={image_size}"
+        )
+    tasks = parquet.read(root / "meta/tasks.parquet")
+    if len(tasks) < 2:
+        raise DatasetError(
+            f"{root}: no instruction diversity: every episode has the same instruction, so nothing could teach "
+            "the policy to read it"
+        )
+    return info
+
+
+def _cache_dir() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "deconfound"
+
+
+def _key(root: Path) -> str:
+    digest = hashlib.sha256()
+    for rel in ("meta/info.json", "meta/episodes/chunk-000/file-000.parquet"):
+        digest.update((root / rel).read_bytes())
+    return digest.hexdigest()[:20]
+
+
+def _decode(root: Path, info: dict, episodes, camera: str, total: int) -> np.ndarray:  # noqa: ANN001
+    """Every frame of one camera, in dataset order."""
+    key = f"observation.images.{camera}"
+    size = info["features"][key]["shape"][0]
+    out = np.empty((total, size, size, 3), np.uint8)
+    files = sorted({(int(r[f"videos/{key}/chunk_index"]), int(r[f"videos/{key}/file_index"])) for _, r in episodes.iterrows()})
+    fps = info["fps"]
+    for chunk, file in files:
+        eps = episodes[(episodes[f"videos/{key}/chunk_index"] == chunk) & (episodes[f"videos/{key}/file_index"] == file)]
+        where: dict[int, int] = {}  # frame number in the file -> frame index in the dataset
+        for _, r in eps.iterrows():
+            first = int(round(r[f"videos/{key}/from_timestamp"] * fps))
+            for k in range(int(r["length"])):
+                where[first + k] = int(r["dataset_from_index"]) + k
+        path = root / info["video_path"].format(video_key=key, chunk_index=chunk, file_index=file)
+        with av.open(str(path)) as container:
+            for k, frame in enumerate(container.decode(container.streams.video[0])):
+                if k in where:
+                    out[where[k]] = frame.to_ndarray(format="rgb24")
+    return out
+
+
+def load(root: Path | str, image_size: int | None = None) -> Frames:
+    root = Path(root)
+    info = check(root, image_size)
+    data = parquet.read(root / "data").sort_values("index")
+    episodes = parquet.read(root / "meta/episodes").sort_values("episode_index")
+    tasks = parquet.read(root / "meta/tasks.parquet").sort_values("task_index")
+    stats = {k: {s: np.asarray(v) for s, v in d.items()} for k, d in json.loads((root / "meta/stats.json").read_text()).items()}
+    total = len(data)
+    cache = _cache_dir() / f"{_key(root)}.npz"
+    if cache.is_file():
+        with np.load(cache) as npz:
+            images = {c: npz[c] for c in CAMERAS}
+    else:
+        images = {c: _decode(root, info, episodes, c, total) for c in CAMERAS}
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        tmp = cache.with_suffix(".tmp.npz")
+        np.savez(tmp, **images)
+        tmp.replace(cache)
+    return Frames(
+        images=images,
+        state=np.stack(data["observation.state"].to_numpy()).astype(np.float32),
+        action=np.stack(data["action"].to_numpy()).astype(np.float32),
+        episode=data["episode_index"].to_numpy(np.int64),
+        task=data["task_index"].to_numpy(np.int64),
+        tasks=list(tasks.index),
+        starts=episodes["dataset_from_index"].to_numpy(np.int64),
+        ends=episodes["dataset_to_index"].to_numpy(np.int64),
+        stats=stats,
+    )
+
+
+def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+    """For frames `index`, the indices of their next `horizon` actions (clamped to the episode's
+    last frame) and a mask of which are real."""
+    ends = frames.ends[frames.episode[index]]
+    steps = index[:, None] + np.arange(horizon)[None, :]
+    mask = steps < ends[:, None]
+    return np.minimum(steps, ends[:, None] - 1), mask

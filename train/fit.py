@@ -1,0 +1,162 @@
+"""Fitting the tiny policy to a generated dataset: behaviour cloning of action chunks.
+
+Each step samples frames, shifts the images by a few pixels (augmentation), encodes each
+distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
+normalised actions, masked past the episode's end). bf16 autocast on the CPU. A checkpoint
+(`last.pt`: weights, optimiser, step, random state) is written every `save_every` steps and at
+the end, so `resume=true` continues a killed run; `model.pt` is the final policy.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from train import data
+from train.model import CAMERAS, ModelConfig, TinyPolicy
+from train.policy import MODEL_FILE, save
+
+LAST = "last.pt"
+
+
+@dataclass
+class LoraOptions:
+    rank: int = 16
+    alpha: int | None = None  # default: 2 x rank
+
+
+@dataclass
+class TrainConfig:
+    dataset: str = "datasets/object"
+    out: str = "runs/train/tiny"
+    policy: str = "tiny"
+    finetune: str = "lora"  # lora | full | frozen
+    lora: LoraOptions = field(default_factory=LoraOptions)
+    steps: int = 3000
+    batch_size: int = 32
+    lr: float = 3e-4  # vision and head
+    text_lr: float | None = None  # text tower (LoRA adapters or full); default 3e-4 for lora, 3e-5 for full
+    chunk: int = 10
+    image_size: int | None = None  # must equal the dataset's frames; default: the dataset's
+    shift: int = 4  # random image shift, pixels
+    seed: int = 0
+    threads: int = 2
+    log_every: int = 50
+    save_every: int = 500
+    resume: bool = False
+
+
+def model_config(cfg: TrainConfig, image_size: int) -> ModelConfig:
+    rank = cfg.lora.rank
+    return ModelConfig(
+        image_size=image_size, chunk=cfg.chunk, finetune=cfg.finetune, lora_rank=rank, lora_alpha=cfg.lora.alpha or 2 * rank
+    )
+
+
+def _shift(images: np.ndarray, pixels: int, rng: np.random.Generator) -> np.ndarray:
+    if pixels <= 0:
+        return images
+    n, h, w, _ = images.shape
+    padded = np.pad(images, ((0, 0), (pixels, pixels), (pixels, pixels), (0, 0)), mode="edge")
+    dy, dx = rng.integers(0, 2 * pixels + 1, size=(2, n))
+    return np.stack([padded[i, dy[i] : dy[i] + h, dx[i] : dx[i] + w] for i in range(n)])
+
+
+def fit(cfg: TrainConfig, progress: bool = True) -> dict:
+    import torch
+    from tqdm import tqdm
+
+    torch.set_num_threads(cfg.threads)
+    frames = data.load(cfg.dataset, cfg.image_size)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(cfg.seed)
+    torch.manual_seed(cfg.seed)
+    model = TinyPolicy(model_config(cfg, frames.image_size), frames.stats)
+    text_params = [p for p in model.text.parameters() if p.requires_grad]
+    other = [p for n, p in model.named_parameters() if p.requires_grad and not n.startswith("text.")]
+    text_lr = cfg.text_lr or (3e-5 if cfg.finetune == "full" else cfg.lr)
+    optimizer = torch.optim.AdamW([{"params": other, "lr": cfg.lr}, {"params": text_params, "lr": text_lr}], weight_decay=1e-4)
+    step, history = 0, []
+    if cfg.resume and (out / LAST).is_file():
+        record = torch.load(out / LAST, map_location="cpu", weights_only=False)
+        if record["config"] != model.config.to_dict():
+            raise ValueError(f"resume=true but {out / LAST} was trained with another model config: {record['config']}")
+        model.load_state_dict(record["weights"], strict=False)
+        optimizer.load_state_dict(record["optimizer"])
+        step, history = record["step"], record["history"]
+        rng.bit_generator.state = record["rng"]
+        torch.set_rng_state(record["torch_rng"])
+    frozen_text = None
+    if cfg.finetune == "frozen":
+        with torch.no_grad():
+            frozen_text = model.embed(frames.tasks)
+    action = torch.from_numpy(frames.action)
+    n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
+    start, running = time.perf_counter(), []
+    bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
+    model.train()
+    while step < cfg.steps:
+        index = rng.integers(0, len(frames), cfg.batch_size)
+        targets, mask = data.chunk_indices(frames, index, cfg.chunk)
+        images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in CAMERAS}
+        state = torch.from_numpy(frames.state[index])
+        tasks = frames.task[index]
+        with torch.autocast("cpu", dtype=torch.bfloat16):
+            if frozen_text is not None:
+                text = frozen_text[tasks]
+            else:
+                unique, inverse = np.unique(tasks, return_inverse=True)
+                text = model.embed([frames.tasks[t] for t in unique])[torch.from_numpy(inverse)]
+            predicted = model(images, state, text).float()
+        goal = model.normalise(action[torch.from_numpy(targets)])
+        weight = torch.from_numpy(mask).float().unsqueeze(-1)
+        loss = ((predicted - goal).abs() * weight).sum() / (weight.sum() * goal.shape[-1])
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        optimizer.step()
+        step += 1
+        running.append(loss.item())
+        bar.update()
+        if step % cfg.log_every == 0 or step == cfg.steps:
+            history.append({"step": step, "loss": float(np.mean(running))})
+            bar.set_postfix(loss=f"{history[-1]['loss']:.4f}")
+            running = []
+        if step % cfg.save_every == 0 or step == cfg.steps:
+            _checkpoint(out, model, optimizer, step, history, rng)
+    bar.close()
+    seconds = time.perf_counter() - start
+    save(out / MODEL_FILE, model, {"train": asdict(cfg), "history": history})
+    summary = {
+        "steps": step,
+        "final_loss": history[-1]["loss"] if history else None,
+        "trainable_parameters": n_trainable,
+        "seconds_this_run": round(seconds, 1),
+        "frames": len(frames),
+        "tasks": len(frames.tasks),
+        "config": asdict(cfg),
+        "history": history,
+    }
+    (out / "train.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def _checkpoint(out: Path, model: TinyPolicy, optimizer, step: int, history: list, rng: np.random.Generator) -> None:  # noqa: ANN001
+    import torch
+
+    save(
+        out / LAST,
+        model,
+        {
+            "optimizer": optimizer.state_dict(),
+            "step": step,
+            "history": history,
+            "rng": rng.bit_generator.state,
+            "torch_rng": torch.get_rng_state(),
+        },
+    )

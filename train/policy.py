@@ -1,0 +1,98 @@
+"""Checkpoints of the tiny policy, and the policy that takes exams from one (`ckpt:<dir>`).
+
+A checkpoint folder holds `model.pt`: the model config, the dataset stats and the weights that
+training changed (the pretrained text tower is rebuilt from its package, then patched).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from train.model import CAMERAS, ModelConfig, TinyPolicy
+
+MODEL_FILE = "model.pt"
+
+
+class CheckpointError(ValueError):
+    pass
+
+
+def save(path: Path, model: TinyPolicy, extra: dict | None = None) -> None:
+    """Atomically write a checkpoint file."""
+    import torch
+
+    tmp = path.with_suffix(".tmp")
+    torch.save({"config": model.config.to_dict(), "weights": model.trainable_state(), **(extra or {})}, tmp)
+    tmp.replace(path)
+
+
+def load(path: Path | str) -> tuple[TinyPolicy, dict]:
+    """A model from a checkpoint folder (or file); returns the model and the whole record."""
+    import torch
+
+    path = Path(path)
+    file = path / MODEL_FILE if path.is_dir() else path
+    if not file.is_file():
+        raise CheckpointError(f"no checkpoint at {file}")
+    try:
+        record = torch.load(file, map_location="cpu", weights_only=False)
+        config = ModelConfig(**record["config"])
+    except Exception as exc:
+        raise CheckpointError(f"{file} is not a tiny-policy checkpoint: {exc}") from None
+    weights = record["weights"]
+    stats = {
+        key: {"mean": weights[f"{name}_mean"].numpy(), "std": weights[f"{name}_std"].numpy()}
+        for key, name in (("observation.state", "state"), ("action", "action"))
+    }
+    model = TinyPolicy(config, stats)
+    missing, unexpected = model.load_state_dict(weights, strict=False)
+    if unexpected:
+        raise CheckpointError(f"{file} does not fit the model: unexpected weights {unexpected[:3]}")
+    model.eval()
+    return model, record
+
+
+class CheckpointPolicy:
+    """Runs a checkpoint in the battery: embeds each instruction once, predicts a chunk of
+    actions and executes the first `replan` of them before looking again."""
+
+    needs_images = True
+
+    def __init__(self, path: str, replan: int = 5) -> None:
+        import torch
+
+        from eval.policies import PolicyError
+
+        try:
+            self.model, _ = load(path)
+        except CheckpointError as exc:
+            raise PolicyError(str(exc)) from None
+        torch.set_num_threads(1)
+        self.name = f"ckpt:{path}"
+        self.replan = min(replan, self.model.config.chunk)
+        self._embeddings: dict[str, object] = {}
+        self._queue: list[np.ndarray] = []
+
+    def reset(self, context) -> None:  # noqa: ANN001
+        self._queue = []
+
+    def act(self, observation: dict) -> np.ndarray:
+        import torch
+
+        if not self._queue:
+            size = self.model.config.image_size
+            for cam in CAMERAS:
+                shape = observation[f"observation.images.{cam}"].shape
+                if shape != (size, size, 3):
+                    raise ValueError(f"{cam} frames are {shape}, the checkpoint was trained on {size} px")
+            text = observation["task"]
+            with torch.inference_mode():
+                if text not in self._embeddings:
+                    self._embeddings[text] = self.model.embed([text])
+                images = {c: torch.from_numpy(observation[f"observation.images.{c}"])[None] for c in CAMERAS}
+                state = torch.from_numpy(observation["observation.state"])[None]
+                chunk = self.model.denormalise(self.model(images, state, self._embeddings[text]))[0].numpy()
+            self._queue = list(chunk[: self.replan])
+        return self._queue.pop(0)
