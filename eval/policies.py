@@ -92,7 +92,7 @@ class Oracle(Scripted):
     def reset(self, context: Context) -> None:
         spec = context.spec
         asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
-        self._actions, self._t = self._plan(asked, referents.load(spec.referent).demo), 0
+        self._actions, self._t = self._plan(asked, referents.demo_of(spec.referent)), 0
 
 
 class Position(Scripted):
@@ -106,11 +106,7 @@ class Position(Scripted):
         nearest = min(spec.objects, key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
         chosen = dataclasses.replace(spec, target=nearest.id, task=TaskSpec(program="pick"))
 
-        def pick(skills, s: EpisodeSpec) -> None:  # noqa: ANN001
-            skills.grasp(s.target)
-            skills.lift()
-
-        self._actions, self._t = self._plan(chosen, pick), 0
+        self._actions, self._t = self._plan(chosen, referents.pick_and_lift), 0
 
 
 class Nothing:

@@ -5,23 +5,26 @@ referent exposes (slot, position bins, identity, composition, rank, side, ...), 
 learns on 4/5 of the episodes how often an alternative with each value of the variable was the
 answer, and on the held-out fifth picks the alternative whose value scored best (ties share the
 credit). Its held-out accuracy, with a Wilson 95% interval, is compared with chance (one over
-the number of alternatives). A variable leaks when the interval's lower end exceeds chance by
-more than LEAK_MARGIN.
+the number of alternatives). A variable leaks when the lower end of a one-sided 95% Wilson
+bound, Bonferroni-corrected for the number of variables audited, exceeds chance by more than
+LEAK_MARGIN. Below MIN_EPISODES a plan is too small for any verdict and none is given.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Sequence
+from statistics import NormalDist
 
 import pandas as pd
 
-from gen.rates import Rate
+from gen.rates import Rate, wilson
 from gen.spec import EpisodeSpec
 from referents import Referent
 
 FOLDS = 5
 LEAK_MARGIN = 0.05
+MIN_EPISODES = 20
 AUDIT_VERSION = 1
 POSITION_WORDS = ("slot", "bin", "rank", "side", "row")
 IDENTITY_WORDS = ("identity", "kind", "composition", "at slot", "object")
@@ -73,14 +76,18 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
     per_episode = df.drop_duplicates(["episode", "alt"]).groupby("episode").size()
     chance = float((1.0 / per_episode).mean())
     expected_words = expected_leaks(referent)
+    groups = list(df.groupby("variable", sort=True))
+    z = NormalDist().inv_cdf(1 - 0.05 / max(len(groups), 1))
     variables = []
-    for var, sub in df.groupby("variable", sort=True):
+    for var, sub in groups:
         rate = Rate(_held_out_hits(sub), n)
-        leak = rate.ci[0] > chance + LEAK_MARGIN
+        bound = wilson(rate.k, n, z)[0]
+        leak = n >= MIN_EPISODES and bound > chance + LEAK_MARGIN
         variables.append(
             {
                 "variable": var,
                 **rate.to_dict(),
+                "leak_bound": round(bound, 4),
                 "chance": round(chance, 4),
                 "leak": leak,
                 "expected": leak and any(w in var for w in expected_words),
@@ -93,8 +100,8 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
         "referent": referent.name,
         "episodes": n,
         "chance": round(chance, 4),
-        "method": f"{FOLDS}-fold held-out accuracy of a value->answer-rate predictor per variable; "
-        f"leak when the Wilson 95% lower bound exceeds chance + {LEAK_MARGIN}",
+        "method": f"{FOLDS}-fold held-out accuracy of a value->answer-rate predictor per variable; leak when the "
+        f"Bonferroni-corrected one-sided 95% Wilson lower bound exceeds chance + {LEAK_MARGIN}",
         "variables": variables,
         "balance": role_balance(referent, specs),
         "vocabulary": {
@@ -105,7 +112,13 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
         "confound": referent.config.confound,
         "leaks": leaks,
         "unexpected_leaks": unexpected,
-        "verdict": "no leak" if not leaks else f"leak: {', '.join(leaks)}",
+        "verdict": (
+            f"too few episodes to audit (n < {MIN_EPISODES})"
+            if n < MIN_EPISODES
+            else "no leak"
+            if not leaks
+            else f"leak: {', '.join(leaks)}"
+        ),
     }
 
 

@@ -24,6 +24,7 @@ class GenConfig:
     seed: int = 0
     out: Optional[str] = None  # output folder; default datasets/<referent>
     overwrite: bool = False  # replace a non-empty `out`
+    resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
     image_size: int = 128  # square camera frames, pixels
     fps: int = 20  # control and recording rate
     codec: str = "h264"  # h264 | av1

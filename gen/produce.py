@@ -16,11 +16,12 @@ from gen.plan import realize
 from gen.spec import EpisodeSpec, SimSettings
 from gen.stats import image_histogram
 from gen.video import encode_episode
-from oracle.episode import Demo, demonstrate, replay
+from oracle.episode import Demo, demonstrate
 from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
-from oracle.success import Outcome, succeeded
+from oracle.success import Outcome
+from oracle.world import STATE_NAMES
 from referents import Referent
 from referents.base import Design
 
@@ -41,11 +42,16 @@ class DemoFailed(RuntimeError):
 class Producer:
     """What a process keeps across episodes: compiled scene, IK and renderer."""
 
-    def __init__(self, referent: Referent, sim: SimSettings, codec: str = "h264") -> None:
+    def __init__(
+        self, referent: Referent | None, sim: SimSettings, codec: str = "h264", assets: tuple[tuple[str, int], ...] | None = None
+    ) -> None:
+        """`referent` may be None for a producer that only records demos of given specs
+        (then `assets` names the scene)."""
         self.referent = referent
         self.sim = sim
         self.codec = codec
-        self.scene: Scene = scene_for(referent.assets())
+        inventory = assets if assets is not None else referent.assets()  # type: ignore[union-attr]
+        self.scene: Scene = scene_for(inventory)
         self.ik = ArmIK(np.asarray(sim.robot_home))
         self._cameras: Cameras | None = None  # made on first use: exams never render
 
@@ -76,22 +82,17 @@ class Producer:
         return self.record(demo, failures)
 
     def record(self, demo: Demo, failures: list[str]) -> Produced:
-        """Replay a verified demo with cameras on."""
+        """Render a verified demo by restoring its recorded physics states, one per action."""
         spec, actions = demo.spec, demo.actions
-        frames = {c: np.empty((len(actions), self.sim.image_size, self.sim.image_size, 3), np.uint8) for c in self.sim.cameras}
-        states = np.empty((len(actions), len(self.scene.state())), np.float32)
-        initial_state: list[np.ndarray] = []
-
-        def observe(t: int) -> None:
-            if t == 0:
-                initial_state.append(self.scene.physics_state())
+        size = self.sim.image_size
+        frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.sim.cameras}
+        states = np.empty((len(actions), len(STATE_NAMES)), np.float32)
+        self.scene.reset(spec)  # colours and body assignment; the states below carry the rest
+        for t, physics in enumerate(demo.states):
+            self.scene.set_physics_state(physics)
             states[t] = self.scene.state()
             for cam, image in self.cameras.render().items():
                 frames[cam][t] = image
-
-        outcome = replay(self.scene, spec, actions, observe)
-        if not succeeded(spec, outcome):
-            raise RuntimeError(f"episode {spec.index}: replay of a verified demo did not succeed (non-deterministic physics?)")
         episode = Episode(
             task=spec.instruction,
             states=states,
@@ -99,4 +100,5 @@ class Producer:
             videos={c: encode_episode(f, self.sim.fps, self.codec) for c, f in frames.items()},
             histograms={c: image_histogram(f) for c, f in frames.items()},
         )
-        return Produced(spec, failures, episode, initial_state[0], outcome)
+        assert demo.outcome is not None
+        return Produced(spec, failures, episode, demo.states[0], demo.outcome)

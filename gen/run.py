@@ -1,12 +1,14 @@
 """Generation: plan -> confound audit -> verified oracle demos -> LeRobot dataset.
 
-Everything is written into a staging folder beside `out` and moved into place in one rename
-once complete, so a failed or interrupted run never leaves a half-written dataset at `out` and
-never destroys the one that was there.
+Everything is built beside `out` (datasets in a resumable partial folder, see gen/partial.py;
+exams and plans in a throwaway one) and moved into place in one rename once complete, so a
+failed or interrupted run never leaves a half-written dataset at `out` and never destroys the
+one that was there.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import platform
@@ -17,10 +19,11 @@ from importlib import metadata
 from pathlib import Path
 
 import referents
-from gen import __version__, card, scenes
+from gen import __version__, card, faults, scenes
 from gen.audit import agree, audit
 from gen.cli import UserError
 from gen.config import GenConfig
+from gen.partial import Partial, publish
 from gen.plan import designs, realize
 from gen.spec import EpisodeSpec, SimSettings
 from oracle.world import ACTION_NAMES, STATE_NAMES
@@ -98,6 +101,15 @@ def check_audit(report: dict) -> None:
         raise UserError(f"the {report['referent']} plan fails its confound audit: {detail} predicts the target")
 
 
+def run_record(cfg: GenConfig) -> dict:
+    """The options that determine a dataset's bytes: a resumed run must match them."""
+    keep = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attempts", "spec", "objects_per_scene")
+    record = {k: getattr(cfg, k) for k in keep} | overrides(cfg) | {"generator_version": __version__}
+    if cfg.spec:
+        record["spec_text"] = Path(cfg.spec).read_text()
+    return record
+
+
 def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     start = time.perf_counter()
     referent = load_referent(cfg)
@@ -110,57 +122,82 @@ def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     audits: dict = {"planned": audit(referent, planned)}
     check_audit(audits["planned"])
     out = Path(cfg.out or f"datasets/{referent.name}")
+    if cfg.split == "exam" or cfg.plan_only:
+        return _quick(cfg, referent, sim, plan, planned, audits, out, start, progress)
+    partial = Partial(out)
+    if partial.exists and cfg.overwrite and not cfg.resume:
+        shutil.rmtree(partial.root)
+    try:
+        done = partial.start(run_record(cfg), cfg.resume)
+    except (FileExistsError, ValueError) as exc:
+        raise UserError(str(exc)) from None
+    failed = _simulate(cfg, referent, sim, plan, partial, done, progress)
+    root = partial.fresh_dataset()
+    rows, frames, written = _assemble(cfg, sim, partial, root)
+    audits["written"] = audit(referent, written)
+    audits["agree"] = agree(audits["planned"], audits["written"])
+    if not audits["agree"]:
+        raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
+    scenes.write(root, rows)
+    (root / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
+    summary = Summary(out, len(rows), frames, failed, time.perf_counter() - start, audits["written"]["verdict"])
+    card.write(root, referent, cfg, summary, audits["written"])
+    faults.point("finalize")
+    _write_generation(root, cfg, referent, summary)  # last: it marks the dataset complete
+    partial.publish()
+    return summary
+
+
+def _quick(
+    cfg: GenConfig,
+    referent: Referent,
+    sim: SimSettings,
+    plan: list,
+    planned: list,
+    audits: dict,
+    out: Path,
+    start: float,
+    progress: bool,
+) -> Summary:
+    """Exams and plans: no video, cheap to redo, so built in a throwaway folder."""
     staging = out.parent / f".{out.name}.staging-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
     try:
-        (staging / "meta").mkdir(parents=True)
         if cfg.split == "exam":
-            (staging / "meta").rmdir()
+            staging.mkdir(parents=True)
             n_trials = _examine(cfg, referent, sim, plan, staging, audits["planned"], progress)
             summary = Summary(out, n_trials, 0, 0, time.perf_counter() - start, audits["planned"]["verdict"], exam=True)
             card.write_exam(staging, referent, cfg, summary, audits["planned"])
-            _publish(staging, out)
-            return summary
-        if cfg.plan_only:
-            rows = [scenes.row(i, spec) for i, spec in enumerate(planned)]
-            frames = failed = 0
         else:
-            rows, frames, failed, written = _simulate(cfg, referent, sim, plan, staging, progress)
-            audits["written"] = audit(referent, written)
-            audits["agree"] = agree(audits["planned"], audits["written"])
-            if not audits["agree"]:
-                raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
-        scenes.write(staging, rows)
-        (staging / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
-        final = audits.get("written", audits["planned"])
-        summary = Summary(out, len(rows), frames, failed, time.perf_counter() - start, final["verdict"], cfg.plan_only)
-        _write_generation(staging, cfg, referent, summary)
-        card.write(staging, referent, cfg, summary, final)
-        _publish(staging, out)
+            (staging / "meta").mkdir(parents=True)
+            scenes.write(staging, [scenes.row(i, spec) for i, spec in enumerate(planned)])
+            (staging / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
+            summary = Summary(out, len(planned), 0, 0, time.perf_counter() - start, audits["planned"]["verdict"], plan_only=True)
+            card.write(staging, referent, cfg, summary, audits["planned"])
+            _write_generation(staging, cfg, referent, summary)
+        publish(staging, out)
         return summary
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 
 
 def _simulate(
-    cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, root: Path, progress: bool
-) -> tuple[list[dict], int, int, list[EpisodeSpec]]:
-    """Demonstrate, verify and record every planned episode into the dataset at `root`."""
+    cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, partial: Partial, done: int, progress: bool
+) -> int:
+    """Produce every episode not yet in the partial run; returns the failed oracle attempts."""
     from tqdm import tqdm
 
-    from gen.lerobot_writer import Layout, LeRobotWriter
     from gen.produce import DemoFailed
     from gen.workers import Job, WorkerCrash, produce
 
-    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
     job = Job(cfg.referent, cfg.spec, overrides(cfg), sim, cfg.codec, cfg.seed, cfg.max_attempts)
-    rows, written, failed = [], [], 0
-    bar = tqdm(total=len(plan), desc=referent.name, unit="ep", disable=not progress, dynamic_ncols=True)
+    bar = tqdm(total=len(plan), initial=done, desc=referent.name, unit="ep", disable=not progress, dynamic_ncols=True)
+    failed = 0
     try:
-        for produced in produce(job, plan, cfg.workers or 1, cfg.backend):
+        for index, produced in enumerate(produce(job, plan, cfg.workers or 1, cfg.backend, start=done), start=done):
+            faults.point(f"episode:{index}")
+            partial.save(index, produced)
             failed += len(produced.failures)
-            rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
-            written.append(produced.spec)
             bar.update()
             bar.set_postfix(retries=failed)
     except DemoFailed as exc:
@@ -169,8 +206,21 @@ def _simulate(
         raise UserError(str(exc)) from None
     finally:
         bar.close()
+    return failed
+
+
+def _assemble(cfg: GenConfig, sim: SimSettings, partial: Partial, root: Path) -> tuple[list[dict], int, list[EpisodeSpec]]:
+    """The LeRobot files, from the episode files, in order."""
+    from gen.lerobot_writer import Layout, LeRobotWriter
+
+    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
+    rows, written = [], []
+    for produced in partial.episodes(cfg.n):
+        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
+        written.append(produced.spec)
+        faults.point(f"assemble:{len(rows) - 1}")
     writer.finalize()
-    return rows, writer.frames, failed, written
+    return rows, writer.frames, written
 
 
 def _examine(cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, root: Path, report: dict, progress: bool) -> int:
@@ -227,20 +277,12 @@ def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: S
         "config": asdict(cfg),
         "referent_spec": asdict(referent.config),
         "plan_only": cfg.plan_only,
+        "complete": True,
+        "referent_spec_hash": hashlib.sha256(
+            json.dumps(asdict(referent.config), sort_keys=True, default=str).encode()
+        ).hexdigest()[:16],
         "episodes": summary.episodes,
         "failed_attempts": summary.failed_attempts,
         "seconds": round(summary.seconds, 2),
     }
     (root / GENERATION_PATH).write_text(json.dumps(record, indent=2, default=str))
-
-
-def _publish(staging: Path, out: Path) -> None:
-    """Move the finished dataset to `out`; an old one is removed only after the swap."""
-    out.parent.mkdir(parents=True, exist_ok=True)
-    old = None
-    if out.exists():
-        old = out.parent / f".{out.name}.old-{os.getpid()}"
-        out.rename(old)
-    staging.rename(out)
-    if old is not None:
-        shutil.rmtree(old)

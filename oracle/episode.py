@@ -1,8 +1,9 @@
 """One episode in the simulator: demonstrate it with a plan, or replay recorded actions.
 
-Generation demonstrates first without rendering (physics is cheap) and only replays verified
-demos with cameras on: MuJoCo is deterministic, so the replay is the demonstration, and a failed
-demo never costs a rendered frame or a written byte.
+Generation demonstrates without rendering (physics is cheap), keeping the physics state before
+every action; only a verified demo is then rendered, by restoring those states one by one, so a
+failed demo never costs a rendered frame or a written byte and no step is simulated twice.
+MuJoCo is deterministic: replaying the recorded actions reproduces the same states (tested).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ Plan = Callable[[Skills, EpisodeSpec], None]
 class Demo:
     spec: EpisodeSpec
     actions: np.ndarray  # (T, 8) float32, exactly what was executed
+    states: np.ndarray  # (T, S) physics state (mjSTATE_INTEGRATION) before each action
     outcome: Outcome | None  # None when the plan could not be executed (e.g. IK failed)
     success: bool
     failure: str = ""
@@ -42,10 +44,11 @@ def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
     try:
         plan(skills, spec)
     except IKError as exc:
-        return Demo(spec, np.asarray(skills.actions, np.float32).reshape(-1, 8), None, False, str(exc))
+        return Demo(spec, np.asarray(skills.actions, np.float32).reshape(-1, 8), np.asarray(skills.states), None, False, str(exc))
     outcome = measure(scene, start)
     ok = succeeded(spec, outcome)
-    return Demo(spec, np.asarray(skills.actions, np.float32), outcome, ok, "" if ok else "success predicate false")
+    actions, states = np.asarray(skills.actions, np.float32), np.asarray(skills.states)
+    return Demo(spec, actions, states, outcome, ok, "" if ok else "success predicate false")
 
 
 def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callable[[int], None] | None = None) -> Outcome:

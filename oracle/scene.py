@@ -2,9 +2,10 @@
 
 A model is compiled once per asset inventory (the spec's `assets`) and every episode re-poses
 it through the simulator state: objects in the episode are moved onto the table, the rest are
-parked under it, out of every camera's view and out of the contact solver. The arm's torque motors become joint-position servos with gravity
-compensation, so an action is exactly what a joint-position controller executes:
-seven joint targets and a gripper command (-1 open, +1 closed).
+parked under it, out of every camera's view and out of the contact solver. The arm's torque
+motors become joint-position servos with gravity compensation, so an action is exactly what a
+joint-position controller executes: seven joint targets and a gripper command (-1 open,
++1 closed).
 """
 
 from __future__ import annotations

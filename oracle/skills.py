@@ -31,10 +31,12 @@ class Skills:
         self.gripper = OPEN
         self.held: tuple[str, float] | None = None  # (object id, grip site height above its bottom)
         self.actions: list[np.ndarray] = []
+        self.states: list[np.ndarray] = []  # physics state before each action
 
     def _execute(self, q: np.ndarray) -> None:
         # The action is rounded to float32 before execution: what is recorded is what ran.
         action = np.concatenate([q, [self.gripper]]).astype(np.float32)
+        self.states.append(self.scene.physics_state())
         self.scene.step(action)
         self.actions.append(action)
 

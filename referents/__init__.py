@@ -18,6 +18,7 @@ Adding a type means adding those two files; nothing else changes.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -53,11 +54,7 @@ class Referent:
         return self.module.design(self.config, balance)
 
     def demo(self, skills: Skills, spec: EpisodeSpec) -> None:
-        if hasattr(self.module, "demo"):
-            self.module.demo(skills, spec)
-        else:
-            skills.grasp(spec.target)
-            skills.lift()
+        demo_of(self.name)(skills, spec)
 
     def alternatives(self, spec: EpisodeSpec) -> list[Alternative]:
         if hasattr(self.module, "alternatives"):
@@ -71,6 +68,16 @@ class Referent:
 
     def answer(self, spec: EpisodeSpec) -> str:
         return self.module.answer(spec) if hasattr(self.module, "answer") else spec.target
+
+
+def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.target)
+    skills.lift()
+
+
+def demo_of(referent_type: str) -> Callable[[Skills, EpisodeSpec], None]:
+    """The oracle's plan for a type's episodes (all a replay needs: no spec file)."""
+    return getattr(importlib.import_module(f"referents.{referent_type}"), "demo", pick_and_lift)
 
 
 def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | None = None) -> Referent:

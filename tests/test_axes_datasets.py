@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import make_dataset
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 import referents
 from gen import parquet, scenes
 from gen.spec import EpisodeSpec
+from helpers import make_dataset
 from oracle.scene import scene_for
 from oracle.success import Outcome, succeeded
 

@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import make_dataset
 
 import referents
 from eval.__main__ import take
@@ -22,6 +21,7 @@ from gen import parquet, scenes
 from gen.exam import read
 from gen.plan import plan
 from gen.spec import SimSettings
+from helpers import make_dataset
 
 
 @pytest.fixture(scope="module")

@@ -9,11 +9,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from helpers import make_dataset
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from gen import parquet, scenes
 from gen.spec import EpisodeSpec
+from helpers import make_dataset
 
 
 def test_lerobot_loader_decodes_every_episode(object_dataset: Path) -> None:

@@ -127,3 +127,9 @@ def test_holdout_and_distractor_only() -> None:
 def test_unsupported_confound_is_refused() -> None:
     with pytest.raises(ValueError, match="confound"):
         referents.load("ordinal", overrides={"confound": "position"})
+
+
+def test_tiny_plans_get_no_verdict() -> None:
+    ref = referents.load("object")
+    report = audit(ref, plan(ref, 5, seed=5, sim=SimSettings()))
+    assert report["verdict"].startswith("too few episodes") and not report["leaks"]

@@ -59,6 +59,11 @@ def check(root: Path, image_size: int | None = None) -> dict:
         info = json.loads(info_path.read_text())
     except json.JSONDecodeError as exc:
         raise DatasetError(f"{info_path} is corrupt: {exc}") from None
+    generation = root / "meta/generation.json"
+    if (root / "meta/scenes.parquet").is_file() and (
+        not generation.is_file() or json.loads(generation.read_text()).get("complete") is not True
+    ):
+        raise DatasetError(f"{root} is an incomplete generated dataset (no completion marker); resume its generation first")
     if info.get("codebase_version") != "v3.0":
         raise DatasetError(f"{root}: codebase_version {info.get('codebase_version')!r}; training reads v3.0 datasets")
     features = info.get("features", {})

@@ -46,14 +46,20 @@ def run(opts: dict[str, str]) -> dict:
         _generate(["referent=object", f"n={n}", f"seed={seed}", f"image_size={size}", *extra], data[name], commands)
         timings[f"generate {name}"] = time.perf_counter() - t
     exam_dir = root / "exam"
-    _generate(["referent=object", f"n={o['trials']}", "split=exam", f"seed={int(seed) + 1}", f"image_size={size}"], exam_dir, commands)
+    _generate(
+        ["referent=object", f"n={o['trials']}", "split=exam", f"seed={int(seed) + 1}", f"image_size={size}"], exam_dir, commands
+    )
     exam = read(exam_dir)
     rows = []
     for name in data:
         for finetune in o.get("finetunes", "lora,full").split(","):
             ckpt = root / "ckpt" / f"{name}-{finetune}"
-            cfg = TrainConfig(dataset=str(data[name]), out=str(ckpt), finetune=finetune, steps=int(o["steps"]), lora=LoraOptions(16))
-            commands.append(f"python -m train dataset={data[name]} policy=tiny finetune={finetune} lora.rank=16 steps={o['steps']} out={ckpt}")
+            cfg = TrainConfig(
+                dataset=str(data[name]), out=str(ckpt), finetune=finetune, steps=int(o["steps"]), lora=LoraOptions(16)
+            )
+            commands.append(
+                f"python -m train dataset={data[name]} policy=tiny finetune={finetune} lora.rank=16 steps={o['steps']} out={ckpt}"
+            )
             t = time.perf_counter()
             if not (ckpt / MODEL_FILE).is_file():
                 fit(cfg)
@@ -73,7 +79,9 @@ def run(opts: dict[str, str]) -> dict:
                     "finetune": finetune,
                     "faces": report["faces"],
                     "init_value_trusted": report["init_value"]["trusted"],
-                    "distances": {k: report["distances"].get(k) for k in ("median_to_named", "median_to_original", "grazing", "n")},
+                    "distances": {
+                        k: report["distances"].get(k) for k in ("median_to_named", "median_to_original", "grazing", "n")
+                    },
                     "final_loss": train_log["final_loss"],
                     "trainable_parameters": train_log["trainable_parameters"],
                 }
@@ -106,7 +114,17 @@ def write_docs(results: dict, docs: Path) -> None:
             f"| {r['data']} | {r['finetune']} | {_cell(f['task'])} | {_cell(f['obeyed_name'])} | {_cell(f['true_target'])} "
             f"| {_cell(f['occ'])} | {_cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
         )
-    lines += ["", "Commands, in order:", "", "```", *results["commands"], "```", "", "Wall time per stage (s, this 2-core machine):", ""]
+    lines += [
+        "",
+        "Commands, in order:",
+        "",
+        "```",
+        *results["commands"],
+        "```",
+        "",
+        "Wall time per stage (s, this 2-core machine):",
+        "",
+    ]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
     (docs / "RESULTS.md").write_text("\n".join(lines) + "\n")
 

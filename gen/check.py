@@ -1,0 +1,136 @@
+"""`python -m gen.check <dataset>`: is this dataset whole and self-consistent?
+
+Checks, in order, and stops at the first problem (exit code 1, one line naming it):
+completion marker and format; episode counts across info.json, the episodes table and the scene
+records; frame index continuity and each episode's frame range; timestamps; every video file's
+frame count and each episode's span inside it; stats recomputed from the data; scene records
+against tasks.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import av
+import numpy as np
+
+from gen import parquet, scenes
+from gen.stats import vector_stats
+
+
+class Broken(Exception):
+    """The first problem found; the message names it."""
+
+
+def _require(condition: bool, problem: str) -> None:
+    if not condition:
+        raise Broken(problem)
+
+
+def _video_frames(path: Path) -> int:
+    with av.open(str(path)) as container:
+        return sum(1 for p in container.demux(container.streams.video[0]) if p.size)
+
+
+def check(root: Path) -> dict:
+    """Raises Broken with the first problem; returns info.json when all is well."""
+    _require((root / "meta/info.json").is_file(), f"{root}: no meta/info.json")
+    generation = root / "meta/generation.json"
+    _require(generation.is_file(), f"{root}: no meta/generation.json: not a complete generated dataset")
+    _require(
+        json.loads(generation.read_text()).get("complete") is True, f"{root}: meta/generation.json does not mark it complete"
+    )
+    info = json.loads((root / "meta/info.json").read_text())
+    _require(info.get("codebase_version") == "v3.0", f"codebase_version is {info.get('codebase_version')!r}, not v3.0")
+    episodes = parquet.read(root / "meta/episodes").sort_values("episode_index").reset_index(drop=True)
+    records = scenes.read(root)
+    n = info["total_episodes"]
+    _require(len(episodes) == n, f"info.json says {n} episodes, meta/episodes has {len(episodes)}")
+    _require(list(episodes["episode_index"]) == list(range(n)), "meta/episodes: episode_index is not 0..n-1")
+    _require(len(records) == n, f"info.json says {n} episodes, meta/scenes.parquet has {len(records)}")
+    data = parquet.read(root / "data").sort_values("index").reset_index(drop=True)
+    total = info["total_frames"]
+    _require(len(data) == total, f"info.json says {total} frames, data has {len(data)}")
+    _require(np.array_equal(data["index"].to_numpy(), np.arange(total)), "data: index is not continuous 0..total_frames-1")
+    fps = info["fps"]
+    for ep in episodes.itertuples():
+        rows = data[data.episode_index == ep.episode_index]
+        start, end = ep.dataset_from_index, ep.dataset_to_index
+        _require(len(rows) == ep.length == end - start, f"episode {ep.episode_index}: {len(rows)} frames, expected {ep.length}")
+        _require(
+            np.array_equal(rows["index"].to_numpy(), np.arange(start, end)), f"episode {ep.episode_index}: frames out of range"
+        )
+        _require(
+            np.array_equal(rows["frame_index"].to_numpy(), np.arange(ep.length)), f"episode {ep.episode_index}: frame_index gaps"
+        )
+        _require(
+            np.allclose(rows["timestamp"].to_numpy(), np.arange(ep.length) / fps, atol=1e-4),
+            f"episode {ep.episode_index}: timestamps are not frame_index / fps",
+        )
+    for key, feature in info["features"].items():
+        if feature["dtype"] != "video":
+            continue
+        files: dict[tuple[int, int], float] = {}
+        for ep in episodes.to_dict("records"):
+            span = (ep[f"videos/{key}/to_timestamp"] - ep[f"videos/{key}/from_timestamp"]) * fps
+            _require(
+                abs(span - ep["length"]) < 1e-3,
+                f"{key}: episode {ep['episode_index']} spans {span:.1f} frames, not {ep['length']}",
+            )
+            where = (int(ep[f"videos/{key}/chunk_index"]), int(ep[f"videos/{key}/file_index"]))
+            files[where] = max(files.get(where, 0.0), ep[f"videos/{key}/to_timestamp"])
+        for (chunk, file), end_s in files.items():
+            path = root / info["video_path"].format(video_key=key, chunk_index=chunk, file_index=file)
+            _require(path.is_file(), f"{key}: missing video {path.relative_to(root)}")
+            try:
+                count = _video_frames(path)
+            except (av.error.FFmpegError, OSError) as exc:
+                raise Broken(f"{key}: {path.relative_to(root)} cannot be read ({exc})") from None
+            _require(
+                count >= round(end_s * fps),
+                f"{key}: {path.relative_to(root)} has {count} frames, episodes need {round(end_s * fps)}",
+            )
+    stats = json.loads((root / "meta/stats.json").read_text())
+    for key in ("observation.state", "action"):
+        values = np.stack(data[key].to_numpy())
+        fresh = vector_stats(values)
+        for name in ("mean", "std", "min", "max"):
+            _require(
+                np.allclose(stats[key][name], fresh[name], rtol=1e-5, atol=1e-6),
+                f"stats.json: {key} {name} does not match the data",
+            )
+    for key, feature in info["features"].items():
+        if feature["dtype"] == "video":
+            _require(min(np.ravel(stats[key]["std"])) > 0, f"stats.json: {key} std is 0")
+    tasks = parquet.read(root / "meta/tasks.parquet")
+    by_index = {int(i): t for t, i in zip(tasks.index, tasks["task_index"])}
+    first = data.groupby("episode_index")["task_index"].first()
+    for rec in records.itertuples():
+        _require(
+            by_index.get(int(first[rec.episode_index])) == rec.instruction,
+            f"episode {rec.episode_index}: its task is not the instruction in meta/scenes.parquet",
+        )
+    return info
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 1 or argv[0] in ("-h", "--help"):
+        print("usage: python -m gen.check <dataset>")
+        return 0 if argv else 2
+    root = Path(argv[0])
+    try:
+        info = check(root)
+    except Broken as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except (OSError, KeyError, ValueError) as exc:
+        print(f"error: {root}: unreadable ({type(exc).__name__}: {exc})", file=sys.stderr)
+        return 1
+    print(f"ok: {root}: {info['total_episodes']} episodes, {info['total_frames']} frames, all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

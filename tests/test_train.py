@@ -1,0 +1,82 @@
+"""The train stage wired end to end on a tiny dataset: a few steps with the real MiniLM text
+tower and LoRA, a resumable checkpoint, an exam trial taken with it, and clear errors for
+datasets it cannot learn from (the experiment, not CI, proves the effect)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from eval.__main__ import take
+from eval.policies import make
+from gen.exam import read
+from gen.lerobot_writer import Episode, Layout, LeRobotWriter
+from gen.stats import image_histogram
+from gen.video import encode_episode
+from helpers import make_dataset
+from oracle.world import ACTION_NAMES, STATE_NAMES
+from train.fit import TrainConfig, fit
+
+
+@pytest.fixture(scope="module")
+def checkpoint(object_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("ckpt")
+    fit(TrainConfig(dataset=str(object_dataset), out=str(out), steps=3, batch_size=4, save_every=2, log_every=1), progress=False)
+    return out
+
+
+def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_dataset: Path) -> None:
+    log = json.loads((checkpoint / "train.json").read_text())
+    assert log["steps"] == 3 and np.isfinite(log["final_loss"]) and log["tasks"] == 4
+    assert (checkpoint / "model.pt").is_file() and (checkpoint / "last.pt").is_file()
+    lora_only = log["trainable_parameters"]
+    assert 0 < lora_only < 5_000_000  # the text tower's 22.7M pretrained weights stay frozen under LoRA
+    resumed = fit(TrainConfig(dataset=str(object_dataset), out=str(checkpoint), steps=5, batch_size=4, resume=True, log_every=1))
+    assert [h["step"] for h in resumed["history"]] == [1, 2, 3, 4, 5]
+
+
+def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
+    exam = read(make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=64"))
+    report, _ = take(exam, exam.trials.head(2), make(f"ckpt:{checkpoint}"), tmp_path / "report")
+    assert not report["errors"], report["errors"]
+    assert report["faces"]["task"]["n"] == 1
+
+
+def _synthetic(root: Path, tasks: list[str], cameras: tuple[str, ...] = ("agentview", "wrist"), size: int = 32) -> Path:
+    writer = LeRobotWriter(root, Layout(20, size, cameras, STATE_NAMES, ACTION_NAMES))
+    for task in tasks:
+        frames = np.random.default_rng(0).integers(0, 255, (5, size, size, 3), dtype=np.uint8)
+        writer.add(
+            Episode(
+                task,
+                np.zeros((5, 16), np.float32),
+                np.zeros((5, 8), np.float32),
+                {c: encode_episode(frames, 20) for c in cameras},
+                {c: image_histogram(frames) for c in cameras},
+            )
+        )
+    writer.finalize()
+    return root
+
+
+def _train(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "train", *args, "steps=1"], capture_output=True, text=True)
+
+
+def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_dataset: Path) -> None:
+    cases = [
+        (_synthetic(tmp_path / "same", ["pick up the lemon"] * 3), "no instruction diversity"),
+        (_synthetic(tmp_path / "onecam", ["a", "b"], cameras=("agentview",)), "missing feature 'observation.images.wrist'"),
+        (tmp_path / "nothing", "is not a LeRobot dataset"),
+    ]
+    for dataset, needle in cases:
+        result = _train(f"dataset={dataset}", f"out={tmp_path / 'ckpt'}")
+        assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1 and needle in result.stderr, result.stderr
+    wrong_size = _train(f"dataset={object_dataset}", "image_size=96", f"out={tmp_path / 'ckpt'}")
+    assert wrong_size.returncode == 2 and "frames are 64 px but image_size=96" in wrong_size.stderr
+    assert not (tmp_path / "ckpt").exists()
