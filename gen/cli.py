@@ -25,9 +25,9 @@ def compose_config(name: str, schema: type, argv: list[str]) -> Any:
     try:
         with initialize(version_base=None, config_path=None):
             cfg = compose(config_name=name, overrides=argv)
-    except (HydraException, OmegaConfBaseException, ValueError) as exc:
+        return OmegaConf.to_object(cfg)
+    except (HydraException, OmegaConfBaseException, ValueError, TypeError) as exc:
         raise UserError(_one_line(exc, schema)) from None
-    return OmegaConf.to_object(cfg)
 
 
 def _one_line(exc: BaseException, schema: type) -> str:

@@ -74,7 +74,10 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"objects_per_scene must be at least 1, got {cfg.objects_per_scene}")
     if cfg.out is None:
         cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
-    check_output(Path(cfg.out), cfg.overwrite)
+    try:
+        check_output(Path(cfg.out), cfg.overwrite)
+    except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
+        raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
 
 
 def check_output(out: Path, overwrite: bool) -> None:

@@ -14,15 +14,22 @@ from gen.spec import EpisodeSpec, SceneObject, SimSettings
 from oracle import catalog
 from oracle.world import TABLE_TOP_Z
 from referents import Referent
-from referents.base import Balance, Design
+from referents.base import Balance, Design, ReferentSpecError
 
 # Extra entropy of each split's random streams: an exam never re-draws a training scene.
 SPLITS = {"train": (), "exam": (0xE7A3,)}
 
 
 def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list[Design]:
+    """The plan's roles. A spec whose values cannot fill a scene fails here, naming the file."""
     balance = Balance(np.random.default_rng([seed, *SPLITS[split]] if SPLITS[split] else seed))
-    return [referent.design(balance) for _ in range(n)]
+    try:
+        return [referent.design(balance) for _ in range(n)]
+    except ReferentSpecError:
+        raise
+    except (ValueError, KeyError, IndexError, TypeError) as exc:
+        problem = f"{type(exc).__name__}: {exc}"
+        raise ReferentSpecError(f"{referent.config.path}: cannot lay out a scene from this spec ({problem})") from None
 
 
 def realize(

@@ -111,13 +111,16 @@ class ReferentConfig:
         for required in ("type", "naming", "objects_per_scene", "objects", "layout", "templates"):
             if required not in data:
                 raise fail(required, "missing field")
+        for name in ("type", "naming"):
+            if not isinstance(data[name], str) or not data[name].isidentifier():
+                raise fail(name, f"must be a word, got {data[name]!r}")
         objects = _candidates(data.pop("objects"), fail)
-        naming = str(data.pop("naming"))
+        naming = data.pop("naming")
         if len({c.key for c in objects}) != len(objects):
             raise fail("objects", "two objects share the same name and attributes")
         vocabulary: dict[str, tuple[str, ...]] = {}
         for option in ("holdout", "distractor_only", "targets"):
-            values = tuple(str(v) for v in (data.pop(option, None) or ()))
+            values = tuple(str(v) for v in _strings(data.pop(option, None) or [], option, fail))
             for v in values:
                 if not any(c.matches(v) for c in objects):
                     raise fail(option, f"{v!r} names no object of this referent")
@@ -140,18 +143,25 @@ class ReferentConfig:
             raise fail("objects_per_scene", f"{k} objects cannot fit in the {len(layout.slots)} slots of layout.slots")
         if not any(c.targetable for c in objects):
             raise fail("distractor_only" if not only else "targets", "leaves no object that can be the target")
-        templates = tuple(str(t) for t in data.pop("templates") or [])
+        templates = tuple(_strings(data.pop("templates") or [], "templates", fail))
         if not templates:
             raise fail("templates", "needs at least one instruction template")
+        task_fields = data.pop("task", None) or {}
+        if not isinstance(task_fields, dict):
+            raise fail("task", f"must be a mapping, got {task_fields!r}")
         try:
-            task = TaskSpec(**(data.pop("task", None) or {}))
+            task = TaskSpec(**task_fields)
         except TypeError as exc:
             raise fail("task", str(exc)) from None
+        margin_ok = isinstance(task.lift_margin, (int, float))
+        well_typed = isinstance(task.program, str) and margin_ok and isinstance(task.params, dict)
+        if not well_typed:
+            raise fail("task", "program must be a word, lift_margin a number, params a mapping")
         confound = data.pop("confound", None)
         if confound is not None and confound not in CONFOUNDS:
             raise fail("confound", f"unknown confound {confound!r}; known: {', '.join(CONFOUNDS)}")
         return cls(
-            type=str(data.pop("type")),
+            type=data.pop("type"),
             path=path,
             naming=naming,
             objects_per_scene=k,
@@ -187,20 +197,32 @@ class ReferentConfig:
         return ReferentSpecError(f"{self.path}: {field_name}: {problem}")
 
 
+def _strings(raw: Any, field_name: str, fail: Callable[[str, str], ReferentSpecError]) -> list[str]:
+    if not isinstance(raw, list) or not all(isinstance(v, (str, int, float)) and not isinstance(v, bool) for v in raw):
+        raise fail(field_name, f"must be a list of words, got {raw!r}")
+    return [str(v) for v in raw]
+
+
 def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> list[Candidate]:
     """Objects, where a list-valued attribute expands into one candidate per value."""
     if not isinstance(raw, list) or not raw:
         raise fail("objects", "must be a non-empty list")
     out = []
     for i, o in enumerate(raw):
-        if not isinstance(o, dict) or "kind" not in o or "name" not in o:
-            raise fail(f"objects[{i}]", "each object needs 'kind' and 'name'")
+        if not isinstance(o, dict) or not isinstance(o.get("kind"), str) or not isinstance(o.get("name"), str):
+            raise fail(f"objects[{i}]", "each object needs 'kind' and 'name' (words)")
+        if not isinstance(o.get("role", ""), str):
+            raise fail(f"objects[{i}].role", f"must be a word, got {o['role']!r}")
         if o["kind"] not in catalog.KINDS:
             raise fail(f"objects[{i}].kind", f"unknown kind {o['kind']!r}; known: {', '.join(sorted(catalog.KINDS))}")
         attrs = o.get("attributes") or {}
         if not isinstance(attrs, dict):
             raise fail(f"objects[{i}].attributes", "must be a mapping")
-        options = {str(k): [str(x) for x in (v if isinstance(v, list) else [v])] for k, v in attrs.items()}
+        options = {
+            str(k): _strings(v if isinstance(v, list) else [v], f"objects[{i}].attributes.{k}", fail) for k, v in attrs.items()
+        }
+        if any(not values for values in options.values()):
+            raise fail(f"objects[{i}].attributes", "an attribute list is empty")
         for color in options.get("color", []):
             if color not in catalog.COLORS:
                 raise fail(f"objects[{i}].attributes.color", f"unknown color {color!r}; known: {', '.join(catalog.COLORS)}")
