@@ -10,7 +10,6 @@ export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 export LP_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= PASSIVE
-export HF_HUB_OFFLINE ?= 1
 export TOKENIZERS_PARALLELISM ?= false
 
 .PHONY: setup demo test bench clean

@@ -19,6 +19,17 @@ def main(argv: list[str]) -> int:
         from gen.run import generate  # the simulator stack loads only for valid input
 
         summary = generate(cfg)
+        if cfg.push_to_hub:
+            from gen.push import PushError, push
+
+            print(summary)
+            try:
+                pushed = push(summary.out, cfg.repo_id or "")
+            except PushError as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 1
+            print(f"pushed {len(pushed.files)} files to {pushed.url} (tag {pushed.tag})")
+            return 0
     except UserError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -3,9 +3,14 @@ shows it, and how to regenerate the data."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+from dataclasses import asdict
+from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gen import __version__
 from gen.config import GenConfig
 from referents import Referent
 
@@ -25,6 +30,18 @@ configs:
   data_files: data/*/*.parquet
 ---
 """
+
+
+def spec_hash(referent: Referent) -> str:
+    """Content hash of the resolved referent spec (recorded in the card and generation.json)."""
+    return hashlib.sha256(json.dumps(asdict(referent.config), sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def provenance(referent: Referent, cfg: GenConfig) -> str:
+    return (
+        f"| generator | deconfound {__version__} |\n| referent spec hash | `{spec_hash(referent)}` |\n| seed | {cfg.seed} |\n"
+        f"| simulator | mujoco {metadata.version('mujoco')}, robosuite {metadata.version('robosuite')} |"
+    )
 
 
 def command(cfg: GenConfig) -> str:
@@ -113,14 +130,29 @@ confound audit is in `meta/audit.json`.
 
 {templates}
 
-## Regenerate
+## Provenance
+
+| | |
+|---|---|
+{provenance(referent, cfg)}
+
+## Regenerate, and take the matching exam
 
 ```
 {command(cfg)}
+{exam_command(cfg)}
+python -m eval policy=<your policy> exam=datasets/{referent.name}-exam
 ```
 """
     )
     (root / "README.md").write_text(text)
+
+
+def exam_command(cfg: GenConfig) -> str:
+    """The held-out exam for a dataset: same referent and options, exam split, another seed."""
+    dropped = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only")
+    kept = [p for p in command(cfg).split(" ") if p.split("=")[0].lstrip("'") not in dropped]
+    return " ".join([*kept, "n=200", f"seed={cfg.seed + 1}", "split=exam"])
 
 
 def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
@@ -143,13 +175,19 @@ generator's `gen/exam.py`.
 |---|---|
 {faces}
 
-Take it in our simulator: `python -m eval policy=<oracle|position|nothing|random|remote:HOST:PORT|ckpt:PATH> exam=<this folder>`;
-or in your own code, with `gymnasium.make("deconfound/Exam-v0", exam=..., row=i)` and score your
+Take it in our simulator: `python -m eval policy=<oracle|position|nothing|random|remote:HOST:PORT|ckpt:PATH>
+exam=<this folder>`; or in your own code, with `gymnasium.make("eval.env:deconfound/Exam-v0", exam=..., row=i)` and score your
 logs with `python -m eval.score exam=<this folder> logs=<rollouts.parquet>`.
 
 ## Confound audit of the plan
 
 {audit_tables(report)}
+
+## Provenance
+
+| | |
+|---|---|
+{provenance(referent, cfg)}
 
 ## Regenerate
 

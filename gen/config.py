@@ -39,6 +39,8 @@ class GenConfig:
     workers: Optional[int] = None  # processes producing episodes; default: this machine's cores
     backend: str = "process"  # process (this machine) | ray (Ray tasks; RAY_ADDRESS selects a cluster)
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
+    push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
+    repo_id: Optional[str] = None  # <user or org>/<name> to push to
 
 
 def parse(argv: list[str]) -> GenConfig:
@@ -58,6 +60,8 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"fps must divide the physics rate of {physics_hz} Hz (e.g. 10, 20, 25, 50), got {cfg.fps}")
     if cfg.codec not in CODECS:
         raise UserError(f"codec must be one of {', '.join(CODECS)}, got {cfg.codec!r}")
+    if cfg.push_to_hub and not cfg.repo_id:
+        raise UserError("push_to_hub=true needs repo_id=<user or org>/<name>")
     if cfg.split not in ("train", "exam"):
         raise UserError(f"split must be train or exam, got {cfg.split!r}")
     if cfg.split == "exam" and cfg.plan_only:

@@ -8,7 +8,6 @@ one that was there.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import platform
@@ -278,9 +277,7 @@ def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: S
         "referent_spec": asdict(referent.config),
         "plan_only": cfg.plan_only,
         "complete": True,
-        "referent_spec_hash": hashlib.sha256(
-            json.dumps(asdict(referent.config), sort_keys=True, default=str).encode()
-        ).hexdigest()[:16],
+        "referent_spec_hash": card.spec_hash(referent),
         "episodes": summary.episodes,
         "failed_attempts": summary.failed_attempts,
         "seconds": round(summary.seconds, 2),

@@ -1,0 +1,127 @@
+"""`python -m gen.push <dataset or exam> repo_id=<user/name> [private=true] [branch=<name>]`
+
+Pushes a generated dataset (or exam) to a Hugging Face-compatible hub the way lerobot does:
+create the dataset repo, upload the folder in one commit, tag it (`v3.0` for datasets, so
+lerobot's loader finds it; `exam-v1` for exams). The endpoint and token come from the usual
+HF_ENDPOINT / HF_TOKEN / `huggingface-cli login`. It refuses a dataset that is incomplete or
+fails `gen.check`, never prints the token, and when the upload fails says what was and was not
+uploaded: the upload is a single commit, so a retry of the same command is always safe.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+IGNORE = [".*", "**/.*", "*.tmp", "**/*.tmp", "*.partial/**"]
+
+
+class PushError(RuntimeError):
+    pass
+
+
+@dataclass
+class Pushed:
+    repo_id: str
+    files: list[str]
+    commit: str
+    tag: str
+    url: str
+
+
+def _files(root: Path) -> list[str]:
+    return sorted(
+        p.relative_to(root).as_posix()
+        for p in root.rglob("*")
+        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(root).parts) and p.suffix != ".tmp"
+    )
+
+
+def _validate(root: Path) -> str:
+    """The tag to push under, once the folder has passed its integrity checks."""
+    if (root / "exam.json").is_file():
+        from gen.exam import EXAM_VERSION, ExamError, read
+
+        try:
+            read(root)
+        except ExamError as exc:
+            raise PushError(f"refusing to push: {exc}") from None
+        return f"exam-v{EXAM_VERSION}"
+    from gen.check import Broken, check
+
+    try:
+        check(root)
+    except Broken as exc:
+        raise PushError(f"refusing to push {root}: {exc}") from None
+    except (OSError, KeyError, ValueError) as exc:
+        raise PushError(f"refusing to push {root}: unreadable ({exc})") from None
+    return "v3.0"
+
+
+def push(root: Path, repo_id: str, private: bool = False, branch: str | None = None) -> Pushed:
+    from huggingface_hub import HfApi
+    from huggingface_hub.errors import HfHubHTTPError
+
+    if "/" not in repo_id or repo_id.count("/") != 1:
+        raise PushError(f"repo_id must be <user or org>/<name>, got {repo_id!r}")
+    tag = _validate(root)
+    files = _files(root)
+    api = HfApi(endpoint=os.environ.get("HF_ENDPOINT"))
+    size_mb = sum((root / f).stat().st_size for f in files) / 1e6
+    stage = "creating the repository"
+    try:
+        repo = api.create_repo(repo_id, repo_type="dataset", private=private, exist_ok=True)
+        if branch:
+            stage = f"creating branch {branch}"
+            api.create_branch(repo_id, branch=branch, repo_type="dataset", exist_ok=True)
+        stage = "uploading"
+        commit = api.upload_folder(
+            folder_path=root,
+            repo_id=repo_id,
+            repo_type="dataset",
+            revision=branch,
+            ignore_patterns=IGNORE,
+            commit_message=f"Upload {root.name} ({len(files)} files) with deconfound",
+        )
+        stage = f"tagging {tag}"
+        api.create_tag(repo_id, tag=tag, revision=branch, repo_type="dataset", exist_ok=True)
+    except (HfHubHTTPError, OSError, ValueError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if stage == f"tagging {tag}":
+            done = f"all {len(files)} files were uploaded, but the {tag} tag was not created"
+        else:
+            done = f"nothing was uploaded ({len(files)} files, {size_mb:.1f} MB pending; the upload is one commit)"
+        raise PushError(f"push to {repo_id} failed while {stage}: {reason}; {done}; rerun the same command to retry") from None
+    return Pushed(repo_id, files, commit.oid, tag, str(repo))
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] in ("-h", "--help"):
+        print("usage: python -m gen.push <dataset or exam dir> repo_id=<user/name> [private=true] [branch=<name>]")
+        return 0 if argv else 2
+    root = Path(argv[0])
+    try:
+        opts = dict(a.split("=", 1) for a in argv[1:])
+    except ValueError:
+        print("error: options are key=value (repo_id=, private=, branch=)", file=sys.stderr)
+        return 2
+    unknown = set(opts) - {"repo_id", "private", "branch"}
+    if unknown or "repo_id" not in opts:
+        print(f"error: {'unknown option ' + repr(sorted(unknown)[0]) if unknown else 'repo_id= is required'}", file=sys.stderr)
+        return 2
+    if opts.get("private", "false").lower() not in ("true", "false"):
+        print(f"error: private must be true or false, got {opts['private']!r}", file=sys.stderr)
+        return 2
+    try:
+        pushed = push(root, opts["repo_id"], opts.get("private", "false").lower() == "true", opts.get("branch"))
+    except PushError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    print(f"pushed {len(pushed.files)} files to {pushed.url} (commit {pushed.commit[:12]}, tag {pushed.tag})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,104 @@
+"""Pushing datasets and exams to a hub: the real `huggingface_hub` client against a small
+hub on loopback (tests/hubserver.py) that records every request."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from hubserver import Hub
+from ledataset.datasets.lerobot_dataset import LeRobotDataset
+
+TOKEN = "hf_not_a_real_token_4f8a"
+
+
+def _env(hub: Hub) -> dict[str, str]:
+    return {**os.environ, "HF_ENDPOINT": hub.url, "HF_TOKEN": TOKEN, "HF_HUB_OFFLINE": "0"}
+
+
+def _push(hub: Hub, root: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "gen.push", str(root), *args], capture_output=True, text=True, env=_env(hub))
+
+
+def _local_files(root: Path) -> set[str]:
+    return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()}
+
+
+def test_push_then_pull_back_and_load(object_dataset: Path, tmp_path: Path) -> None:
+    with Hub() as hub:
+        result = _push(hub, object_dataset, "repo_id=lab/object-demo", "private=true")
+        assert result.returncode == 0, result.stderr
+        assert TOKEN not in result.stdout + result.stderr
+        repo = hub.repos["lab/object-demo"]
+        assert repo.private
+        assert set(repo.files) == _local_files(object_dataset)
+        assert {f for f in repo.files if f.startswith(("data/", "videos/", "meta/"))} >= {
+            "data/chunk-000/file-000.parquet",
+            "meta/info.json",
+            "meta/episodes/chunk-000/file-000.parquet",
+            "meta/tasks.parquet",
+            "meta/stats.json",
+            "meta/scenes.parquet",
+            "meta/audit.json",
+            "videos/observation.images.agentview/chunk-000/file-000.mp4",
+            "videos/observation.images.wrist/chunk-000/file-000.mp4",
+        }
+        assert repo.refs["v3.0"] == repo.refs["main"]
+        assert all(r["auth"] == f"Bearer {TOKEN}" for r in hub.requests if r["method"] == "POST")
+        card = repo.files["README.md"].decode()
+        front = yaml.safe_load(card.split("---")[1])
+        assert "LeRobot" in front["tags"] and front["task_categories"] == ["robotics"]
+        assert front["configs"][0]["data_files"] == "data/*/*.parquet" and front["license"]
+        assert "## Confound audit" in card and "referent spec hash" in card and "split=exam" in card
+        pulled = tmp_path / "pulled"
+        code = (
+            "from huggingface_hub import snapshot_download;"
+            f"snapshot_download('lab/object-demo', repo_type='dataset', revision='v3.0', local_dir='{pulled}')"
+        )
+        subprocess.run([sys.executable, "-c", code], check=True, env=_env(hub), capture_output=True)
+    ds = LeRobotDataset("lab/object-demo", root=pulled)
+    assert ds.num_episodes == 4 and ds[0]["observation.images.agentview"].shape[0] == 3
+
+
+def test_failed_upload_says_what_happened_and_retry_works(object_dataset: Path) -> None:
+    with Hub() as hub:
+        hub.fail_commits = 1
+        failed = _push(hub, object_dataset, "repo_id=lab/flaky")
+        assert failed.returncode == 1 and len(failed.stderr.strip().splitlines()) == 1
+        assert "failed while uploading" in failed.stderr and "nothing was uploaded" in failed.stderr and "retry" in failed.stderr
+        assert TOKEN not in failed.stderr and not hub.repos["lab/flaky"].files
+        retried = _push(hub, object_dataset, "repo_id=lab/flaky")
+        assert retried.returncode == 0, retried.stderr
+        assert set(hub.repos["lab/flaky"].files) == _local_files(object_dataset)
+
+
+def test_refuses_incomplete_or_damaged_datasets(object_dataset: Path, tmp_path: Path) -> None:
+    damaged = tmp_path / "damaged"
+    shutil.copytree(object_dataset, damaged)
+    (damaged / "meta/generation.json").unlink()
+    with Hub() as hub:
+        result = _push(hub, damaged, "repo_id=lab/bad")
+        assert result.returncode == 1 and "refusing to push" in result.stderr
+        assert not hub.requests
+
+
+@pytest.fixture
+def exam(tmp_path: Path) -> Path:
+    from helpers import make_dataset
+
+    return make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=32")
+
+
+def test_exams_push_with_their_own_tag(exam: Path) -> None:
+    with Hub() as hub:
+        result = _push(hub, exam, "repo_id=lab/object-exam", "branch=v1")
+        assert result.returncode == 0, result.stderr
+        repo = hub.repos["lab/object-exam"]
+        assert set(repo.files) == {"exam.json", "trials.parquet", "README.md"}
+        assert "exam-v1" in repo.refs and "v1" in repo.refs
+        assert "trials.parquet" in yaml.safe_load(repo.files["README.md"].decode().split("---")[1])["configs"][0]["data_files"]
