@@ -80,3 +80,18 @@ def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_datase
     wrong_size = _train(f"dataset={object_dataset}", "image_size=96", f"out={tmp_path / 'ckpt'}")
     assert wrong_size.returncode == 2 and "frames are 64 px but image_size=96" in wrong_size.stderr
     assert not (tmp_path / "ckpt").exists()
+
+
+def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
+    server = subprocess.Popen(
+        [sys.executable, "-m", "eval.serve", f"policy=ckpt:{checkpoint}", "port=0"], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        line = server.stdout.readline()  # type: ignore[union-attr]
+        assert line.startswith("serving"), line
+        address = line.strip().rsplit("ws://", 1)[1]
+        exam = read(make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=64"))
+        report, _ = take(exam, exam.trials.head(1), make(f"remote:{address}"), tmp_path / "report")
+        assert not report["errors"], report["errors"]
+    finally:
+        server.kill()

@@ -41,6 +41,7 @@ class Frames:
     starts: np.ndarray  # first frame of each episode
     ends: np.ndarray  # one past the last frame of each episode
     stats: dict[str, dict[str, np.ndarray]]
+    target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
 
     @property
     def image_size(self) -> int:
@@ -154,7 +155,21 @@ def load(root: Path | str, image_size: int | None = None) -> Frames:
         starts=episodes["dataset_from_index"].to_numpy(np.int64),
         ends=episodes["dataset_to_index"].to_numpy(np.int64),
         stats=stats,
+        target=_targets(root),
     )
+
+
+def _targets(root: Path) -> np.ndarray | None:
+    """Start position of each episode's target object (None for datasets without scene records)."""
+    path = root / "meta/scenes.parquet"
+    if not path.is_file():
+        return None
+    records = parquet.read(path).sort_values("episode_index")
+    out = []
+    for scene, target in zip(records["scene"], records["target"]):
+        objects = {o["id"]: o["pos"] for o in json.loads(scene)["objects"]}
+        out.append(objects[target])
+    return np.asarray(out, np.float32)
 
 
 def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:

@@ -44,6 +44,8 @@ class TrainConfig:
     chunk: int = 10
     image_size: int | None = None  # must equal the dataset's frames; default: the dataset's
     shift: int = 4  # random image shift, pixels
+    state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan
+    aux_weight: float = 1.0  # weight of the where-is-the-target loss (needs meta/scenes.parquet)
     seed: int = 0
     threads: int = 2
     bf16: bool = False  # bf16 autocast; measured 15x slower than fp32 on this machine's torch build
@@ -98,6 +100,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
         with torch.no_grad():
             frozen_text = model.embed(frames.tasks)
     action = torch.from_numpy(frames.action)
+    target_pos = torch.from_numpy(frames.target) if frames.target is not None else None
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
@@ -114,10 +117,13 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             else:
                 unique, inverse = np.unique(tasks, return_inverse=True)
                 text = model.embed([frames.tasks[t] for t in unique])[torch.from_numpy(inverse)]
-            predicted = model(images, state, text).float()
+            predicted, located = model(images, state, text, cfg.state_noise)
         goal = model.normalise(action[torch.from_numpy(targets)])
         weight = torch.from_numpy(mask).float().unsqueeze(-1)
-        loss = ((predicted - goal).abs() * weight).sum() / (weight.sum() * goal.shape[-1])
+        loss = ((predicted.float() - goal).abs() * weight).sum() / (weight.sum() * goal.shape[-1])
+        if target_pos is not None and cfg.aux_weight > 0:
+            where = model.locate_target(target_pos[torch.from_numpy(frames.episode[index])])
+            loss = loss + cfg.aux_weight * (located.float() - where).abs().mean()
         optimizer.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)

@@ -9,6 +9,9 @@ looks where the instruction points, and an MLP predicts a chunk of actions.
   keypoint maps into image coordinates (where the named object is) and a pooled feature.
 * Head: keypoints, pooled features, normalised state and the instruction embedding -> MLP ->
   `chunk` future actions (normalised with the dataset's stats).
+* Auxiliary head (training only): where the named object stands, from the same features. It
+  is supervised with the scene records and makes grounding the instruction in the image the
+  easiest way to lower the loss; at test time the policy sees only images, state and words.
 """
 
 from __future__ import annotations
@@ -115,6 +118,7 @@ class TinyPolicy(nn.Module):
         self.cameras = nn.ModuleDict({c: CameraEncoder(config) for c in CAMERAS})
         self.text_proj = nn.Linear(TEXT_DIM, 128)
         width = sum(e.out_dim for e in self.cameras.values()) + STATE_DIM + 128
+        self.locate = nn.Sequential(nn.Linear(width - STATE_DIM, 128), nn.ReLU(), nn.Linear(128, 3))
         self.head = nn.Sequential(
             nn.Linear(width, config.hidden),
             nn.ReLU(),
@@ -135,12 +139,23 @@ class TinyPolicy(nn.Module):
         pooled = (hidden * mask).sum(1) / mask.sum(1).clamp(min=1)
         return F.normalize(pooled.float(), dim=-1)
 
-    def forward(self, images: dict[str, torch.Tensor], state: torch.Tensor, text: torch.Tensor) -> torch.Tensor:
-        """Images (B, H, W, 3) uint8, state (B, 16), text (B, 384) -> normalised actions (B, chunk, 8)."""
+    def forward(
+        self, images: dict[str, torch.Tensor], state: torch.Tensor, text: torch.Tensor, state_noise: float = 0.0
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Images (B, H, W, 3) uint8, state (B, 16), text (B, 384) -> normalised actions
+        (B, chunk, 8) and where the named object is (B, 3, normalised: see `locate_target`)."""
         feats = [self.cameras[c](images[c].permute(0, 3, 1, 2).float() / 255.0, text) for c in CAMERAS]
         s = (state - self.state_mean) / self.state_std
-        x = torch.cat([*feats, s, self.text_proj(text)], dim=1)
-        return self.head(x).reshape(-1, self.config.chunk, ACTION_DIM)
+        if state_noise > 0:
+            s = s + state_noise * torch.randn_like(s)
+        seen = torch.cat([*feats, self.text_proj(text)], dim=1)
+        actions = self.head(torch.cat([seen, s], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
+        return actions, self.locate(seen)
+
+    @staticmethod
+    def locate_target(position: torch.Tensor) -> torch.Tensor:
+        """World position -> the auxiliary head's normalised target (table centre, 20 cm units)."""
+        return (position - torch.tensor([0.0, 0.0, 0.85])) / 0.2
 
     def normalise(self, action: torch.Tensor) -> torch.Tensor:
         return (action - self.action_mean) / self.action_std

@@ -78,21 +78,25 @@ class CheckpointPolicy:
     def reset(self, context) -> None:  # noqa: ANN001
         self._queue = []
 
-    def act(self, observation: dict) -> np.ndarray:
+    def chunk(self, observation: dict) -> np.ndarray:
+        """The next `chunk` actions (chunk, 8) for an observation dict."""
         import torch
 
+        size = self.model.config.image_size
+        for cam in CAMERAS:
+            shape = observation[f"observation.images.{cam}"].shape
+            if shape != (size, size, 3):
+                raise ValueError(f"{cam} frames are {shape}, the checkpoint was trained on {size} px")
+        text = observation["task"]
+        with torch.inference_mode():
+            if text not in self._embeddings:
+                self._embeddings[text] = self.model.embed([text])
+            images = {c: torch.from_numpy(np.ascontiguousarray(observation[f"observation.images.{c}"]))[None] for c in CAMERAS}
+            state = torch.from_numpy(np.asarray(observation["observation.state"], np.float32))[None]
+            actions, _ = self.model(images, state, self._embeddings[text])
+            return self.model.denormalise(actions)[0].numpy()
+
+    def act(self, observation: dict) -> np.ndarray:
         if not self._queue:
-            size = self.model.config.image_size
-            for cam in CAMERAS:
-                shape = observation[f"observation.images.{cam}"].shape
-                if shape != (size, size, 3):
-                    raise ValueError(f"{cam} frames are {shape}, the checkpoint was trained on {size} px")
-            text = observation["task"]
-            with torch.inference_mode():
-                if text not in self._embeddings:
-                    self._embeddings[text] = self.model.embed([text])
-                images = {c: torch.from_numpy(observation[f"observation.images.{c}"])[None] for c in CAMERAS}
-                state = torch.from_numpy(observation["observation.state"])[None]
-                chunk = self.model.denormalise(self.model(images, state, self._embeddings[text]))[0].numpy()
-            self._queue = list(chunk[: self.replan])
+            self._queue = list(self.chunk(observation)[: self.replan])
         return self._queue.pop(0)

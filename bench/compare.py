@@ -1,0 +1,140 @@
+"""Our generator against the naive path and against the render-only floor, on the same episodes.
+
+    python bench/compare.py [n=50] [sizes=10,50,200] [referent=object]
+
+(a) ours: `python -m gen` (plan, oracle demos, render from the recorded states, per-episode
+    encoding, LeRobot files), with 1 worker and with the machine's cores;
+(b) naive: robosuite's camera observations through `env.step` (Panda, Lift scene, 2 cameras at
+    128 px) and lerobot's own `LeRobotDataset.create/add_frame/save_episode/finalize`, for the
+    same number of frames per episode;
+(c) floor: only rendering the same frames (2 cameras, same settings) from (a)'s recorded states.
+
+Prints seconds per episode, the ratios (b)/(a) and (a)/(c), per-worker peak memory, and how (a)'s
+wall time grows with n.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import oracle  # noqa: F401  (headless-rendering defaults)
+from gen import parquet, scenes
+from gen.config import parse
+from gen.run import generate
+from gen.spec import EpisodeSpec
+
+
+def ours(n: int, workers: int, referent: str, root: Path) -> tuple[float, Path]:
+    out = root / f"ours-{n}-{workers}"
+    start = time.perf_counter()
+    generate(parse([f"referent={referent}", f"n={n}", f"workers={workers}", f"out={out}", "image_size=128"]), progress=False)
+    return time.perf_counter() - start, out
+
+
+def floor(dataset: Path) -> float:
+    """Render every recorded frame of the dataset's episodes again, nothing else."""
+    from oracle.episode import demonstrate
+    from oracle.ik import ArmIK
+    from oracle.render import Cameras
+    from oracle.scene import scene_for
+    from referents import demo_of
+
+    specs = [EpisodeSpec.from_json(s) for s in scenes.read(dataset)["spec"]]
+    scene = scene_for(specs[0].assets)
+    ik = ArmIK(np.asarray(specs[0].sim.robot_home))
+    states = [demonstrate(scene, ik, s, demo_of(s.referent)).states for s in specs]  # not timed
+    cams = Cameras(scene, 128, ("agentview", "wrist"))
+    start = time.perf_counter()
+    for spec, episode in zip(specs, states):
+        scene.reset(spec)
+        for state in episode:
+            scene.set_physics_state(state)
+            cams.render()
+    elapsed = time.perf_counter() - start
+    cams.close()
+    return elapsed
+
+
+def naive(lengths: list[int], root: Path) -> float:
+    """robosuite env.step with camera observations + lerobot's own writer."""
+    import robosuite as suite
+    from ledataset.datasets.lerobot_dataset import LeRobotDataset
+
+    env = suite.make(
+        "Lift",
+        robots="Panda",
+        has_renderer=False,
+        has_offscreen_renderer=True,
+        use_camera_obs=True,
+        camera_names=["agentview", "robot0_eye_in_hand"],
+        camera_heights=128,
+        camera_widths=128,
+        control_freq=20,
+    )
+    features = {
+        "observation.images.agentview": {"dtype": "video", "shape": (128, 128, 3), "names": ["height", "width", "channels"]},
+        "observation.images.wrist": {"dtype": "video", "shape": (128, 128, 3), "names": ["height", "width", "channels"]},
+        "observation.state": {"dtype": "float32", "shape": (16,), "names": None},
+        "action": {"dtype": "float32", "shape": (7,), "names": None},
+    }
+    start = time.perf_counter()
+    ds = LeRobotDataset.create("bench/naive", fps=20, features=features, root=root / "naive", use_videos=True)
+    for length in lengths:
+        obs = env.reset()
+        for _ in range(length):
+            action = np.zeros(7, np.float32)
+            ds.add_frame(
+                {
+                    "observation.images.agentview": obs["agentview_image"],
+                    "observation.images.wrist": obs["robot0_eye_in_hand_image"],
+                    "observation.state": np.concatenate(
+                        [obs["robot0_joint_pos"], obs["robot0_gripper_qpos"], obs["robot0_eef_pos"], obs["robot0_eef_quat"]]
+                    ).astype(np.float32),
+                    "action": action,
+                    "task": "pick up the cube",
+                }
+            )
+            obs, *_ = env.step(action)
+        ds.save_episode()
+    ds.finalize()
+    env.close()
+    return time.perf_counter() - start
+
+
+def main(argv: list[str]) -> None:
+    opts = dict(a.split("=", 1) for a in argv)
+    n = int(opts.get("n", 50))
+    referent = opts.get("referent", "object")
+    cores = os.cpu_count() or 1
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        a1, dataset = ours(n, 1, referent, root)
+        a_all, _ = ours(n, cores, referent, root)
+        child_rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+        lengths = [int(x) for x in parquet.read(dataset / "meta/episodes")["length"]]
+        frames = sum(lengths)
+        c = floor(dataset)
+        b = naive(lengths, root)
+        main_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        print(f"{n} {referent} episodes, {frames} frames, 2 cameras at 128 px, {cores} cores")
+        print(f"(a) ours, 1 worker      {a1 / n:7.3f} s/episode  {frames / a1:6.1f} frames/s")
+        print(f"(a) ours, {cores} workers     {a_all / n:7.3f} s/episode  {frames / a_all:6.1f} frames/s")
+        print(f"(b) naive (robosuite + lerobot writer) {b / n:7.3f} s/episode  {frames / b:6.1f} frames/s")
+        print(f"(c) render-only floor   {c / n:7.3f} s/episode  {frames / c:6.1f} frames/s")
+        print(f"(b)/(a): {b / a1:.2f} with 1 worker, {b / a_all:.2f} with {cores}")
+        print(f"(a)/(c): {a1 / c:.3f} (1 process each)")
+        print(f"peak RSS: worker processes {child_rss:.0f} MB (max over workers), this process {main_rss:.0f} MB")
+        for size in [int(s) for s in opts.get("sizes", "10,50,200").split(",")]:
+            seconds, _ = ours(size, cores, referent, root)
+            print(f"n={size:<4} ours with {cores} workers: {seconds:7.1f} s wall, {seconds / size:.2f} s/episode")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
