@@ -48,10 +48,6 @@ class Kind:
     def height(self) -> float:
         return self.size[2]
 
-    @property
-    def is_destination(self) -> bool:
-        return self.inner > 0
-
     def rest_z(self, surface_z: float) -> float:
         """Body-origin height when the object rests on a surface at `surface_z`."""
         return surface_z + self.bottom

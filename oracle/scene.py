@@ -129,7 +129,6 @@ class Body:
     kind: catalog.Kind
     body_id: int
     qpos_adr: int
-    qvel_adr: int
     geom_ids: tuple[int, ...]
     park: np.ndarray  # free-joint qpos when not in the episode
     collision: tuple[tuple[int, int], ...]  # compiled (contype, conaffinity) of each geom
@@ -160,7 +159,7 @@ class Scene:
                 x, y = spots[index % len(spots)]
                 park = np.array([x, y, kind.rest_z(0.0) + 0.001 * (index // len(spots)), 1, 0, 0, 0])
                 collision = tuple((int(m.geom_contype[g]), int(m.geom_conaffinity[g])) for g in geoms)
-                body = Body(kind, body_id, joint.qposadr[0], joint.dofadr[0], geoms, park, collision)
+                body = Body(kind, body_id, joint.qposadr[0], geoms, park, collision)
                 self.bodies.setdefault(kind_name, []).append(body)
                 index += 1
         if index > len(spots):
@@ -237,9 +236,6 @@ class Scene:
     def object_yaw(self, object_id: str) -> float:
         mat = self.data.xmat[self.placed[object_id].body_id].reshape(3, 3)
         return float(np.arctan2(mat[1, 0], mat[0, 0]))
-
-    def arm_q(self) -> np.ndarray:
-        return self.data.qpos[self.arm_qpos].copy()
 
     def physics_state(self) -> np.ndarray:
         """The full physics state (mjSTATE_INTEGRATION): what an exam stores to restart a trial."""

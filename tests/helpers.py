@@ -4,11 +4,30 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import mujoco
+import numpy as np
+
 from gen.config import parse
 from gen.run import generate
+from oracle.scene import Scene
+from oracle.world import CAMERAS
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:
     """Generate a dataset through the real CLI config and pipeline."""
     generate(parse([f"out={out}", *overrides]), progress=False)
     return out
+
+
+def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]:
+    """Pixels per body id in a segmentation render of `camera` (collision geoms hidden)."""
+    renderer = mujoco.Renderer(scene.model, size, size)
+    renderer.enable_segmentation_rendering()
+    option = mujoco.MjvOption()
+    option.geomgroup[0] = False
+    renderer.update_scene(scene.data, camera=CAMERAS[camera], scene_option=option)
+    seg = renderer.render()
+    renderer.close()
+    geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
+    bodies, counts = np.unique(scene.model.geom_bodyid[geoms], return_counts=True)
+    return dict(zip(bodies.tolist(), counts.tolist()))

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from collections import Counter
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -13,10 +12,10 @@ import referents
 from gen.audit import audit
 from gen.plan import plan
 from gen.spec import EpisodeSpec, SimSettings
+from helpers import visible_bodies
 from oracle.episode import replay
 from oracle.scene import scene_for
 from oracle.success import succeeded
-from oracle.world import CAMERAS
 
 TYPES = referents.available()
 
@@ -68,26 +67,13 @@ def test_counterfactuals_ask_for_something_else_in_the_scene(planned: tuple) -> 
             assert c.changed[0] != c.changed[1]
 
 
-def _visible(scene, camera: str) -> dict[int, int]:
-    renderer = mujoco.Renderer(scene.model, 128, 128)
-    renderer.enable_segmentation_rendering()
-    option = mujoco.MjvOption()
-    option.geomgroup[0] = False
-    renderer.update_scene(scene.data, camera=CAMERAS[camera], scene_option=option)
-    seg = renderer.render()
-    renderer.close()
-    geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
-    bodies, counts = np.unique(scene.model.geom_bodyid[geoms], return_counts=True)
-    return dict(zip(bodies.tolist(), counts.tolist()))
-
-
 @pytest.mark.parametrize("name", TYPES)
 def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
     ref = referents.load(name)
     scene = scene_for(ref.assets())
     for spec in plan(ref, 3, seed=4, sim=SimSettings()):
         scene.reset(spec)
-        visible = _visible(scene, "agentview")
+        visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
             assert visible.get(scene.placed[obj.id].body_id, 0) >= 8, f"{name}: {obj.id} not visible"
         still = np.tile(np.array([*spec.sim.robot_home, -1.0], np.float32), (30, 1))

@@ -9,6 +9,7 @@ import pytest
 import referents
 from gen.plan import plan
 from gen.spec import SimSettings
+from helpers import visible_bodies
 from oracle import catalog
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
@@ -54,31 +55,17 @@ def test_catalog_extents_match_the_models() -> None:
         assert abs((origin[2] - lo[2]) - kind.bottom) < 0.002, name
 
 
-def _visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]:
-    """Pixels per body id in a segmentation render of `camera`."""
-    renderer = mujoco.Renderer(scene.model, size, size)
-    renderer.enable_segmentation_rendering()
-    option = mujoco.MjvOption()
-    option.geomgroup[0] = False
-    renderer.update_scene(scene.data, camera=CAMERAS[camera], scene_option=option)
-    seg = renderer.render()
-    renderer.close()
-    geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
-    bodies, counts = np.unique(scene.model.geom_bodyid[geoms], return_counts=True)
-    return dict(zip(bodies.tolist(), counts.tolist()))
-
-
 def test_every_object_is_in_frame_and_parked_ones_are_not(scene: Scene) -> None:
     for spec in plan(referents.load("object"), 4, seed=2, sim=SimSettings()):
         scene.reset(spec)
-        visible = _visible_bodies(scene, "agentview")
+        visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
             assert visible.get(scene.placed[obj.id].body_id, 0) >= 10, f"{obj.id} not visible in episode {spec.index}"
         placed = {b.body_id for b in scene.placed.values()}
         parked = [b for bodies in scene.bodies.values() for b in bodies if b.body_id not in placed]
         assert parked, "the object scene should park some objects"
         for camera in CAMERAS:
-            seen = _visible_bodies(scene, camera)
+            seen = visible_bodies(scene, camera)
             assert not [b for b in parked if seen.get(b.body_id)], f"a parked object shows in {camera}"
 
 
