@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from gen import faults
 from gen.produce import Produced, Producer
 from gen.spec import SimSettings
 from referents.base import Design
@@ -57,6 +58,7 @@ def _init(job: Job) -> None:
 
 def _produce(index: int, design: Design) -> Produced:
     assert _producer is not None and _job is not None
+    faults.point(f"worker:{index}")
     return _producer.produce(design, index, _job.seed, _job.max_attempts)
 
 
@@ -95,8 +97,8 @@ def _processes(job: Job, plan: list[Design], workers: int, start: int) -> Iterat
                 restarts += 1
                 if restarts > MAX_POOL_RESTARTS:
                     raise WorkerCrash(
-                        f"a worker process died {restarts} times (last while producing episode {next_index}); "
-                        "nothing unfinished was written"
+                        f"a worker process died {restarts} times while producing episodes {next_index}-{submitted - 1}; "
+                        f"the {next_index} episodes before them are saved and resume=true continues from there"
                     ) from None
                 for future in window.values():
                     future.cancel()

@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from gen.spec import EpisodeSpec, SceneObject
-from oracle import catalog, world
+from oracle import catalog, meshes, world
 
 # robosuite logs warnings about optional extras at import; they say nothing about our use.
 logging.getLogger("robosuite_logs").addFilter(lambda record: record.levelno >= logging.ERROR)
@@ -112,6 +112,7 @@ def scene_xml(assets: tuple[tuple[str, int], ...]) -> str:
     root = ET.fromstring(task.get_xml())
     _servo_and_gravcomp(root)
     _configure(root)
+    meshes.lighten(root)
     return ET.tostring(root, encoding="unicode")
 
 

@@ -18,7 +18,7 @@ import pytest
 
 from gen import parquet
 
-ARGS = ("n=3", "image_size=32", "seed=5", "workers=1")
+ARGS = ("n=3", "image_size=32", "seed=5")
 FILES = (
     "data/chunk-000/file-000.parquet",
     "meta/scenes.parquet",
@@ -31,11 +31,14 @@ FILES = (
 )
 
 
-def _gen(*args: str, crash: str | None = None) -> subprocess.CompletedProcess[str]:
+def _gen(*args: str, crash: str | None = None, once: Path | None = None, workers: int = 1) -> subprocess.CompletedProcess[str]:
     env = {**os.environ}
     if crash:
         env["DECONFOUND_CRASH_AT"] = crash
-    return subprocess.run([sys.executable, "-m", "gen", *ARGS, *args], capture_output=True, text=True, env=env)
+    if once:
+        env["DECONFOUND_CRASH_ONCE"] = str(once)
+    argv = [sys.executable, "-m", "gen", *ARGS, f"workers={workers}", *args]
+    return subprocess.run(argv, capture_output=True, text=True, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -60,6 +63,23 @@ def test_resume_after_sigkill_gives_identical_bytes(clean: Path, tmp_path: Path,
     episodes = parquet.read(out / "meta/episodes")
     assert list(episodes["episode_index"]) == [0, 1, 2]
     assert not list(tmp_path.glob(".ds.*")), "the partial run is cleaned up"
+
+
+def test_a_worker_killed_mid_episode_is_replaced_and_the_data_is_unchanged(clean: Path, tmp_path: Path) -> None:
+    out, once = tmp_path / "ds", tmp_path / "crashed"
+    run = _gen(f"out={out}", crash="worker:1", once=once, workers=2)
+    assert run.returncode == 0, run.stderr
+    assert once.is_file(), "the fault was injected"
+    for rel in FILES:
+        assert (out / rel).read_bytes() == (clean / rel).read_bytes(), rel
+
+
+def test_a_worker_that_keeps_dying_stops_the_run_with_a_clear_error(tmp_path: Path) -> None:
+    out = tmp_path / "ds"
+    run = _gen(f"out={out}", crash="worker:1", workers=2)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines()[-1].startswith("error: a worker process died 3 times"), run.stderr
+    assert not out.exists()
 
 
 def test_resume_refuses_other_options(tmp_path: Path) -> None:
