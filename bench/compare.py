@@ -24,6 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+# Before any GL context exists: torchvision, which lerobot's writer imports, loads triton, which
+# crashes (SIGSEGV) in a process that has already made an EGL context.
+from ledataset.datasets.lerobot_dataset import LeRobotDataset
+
 import oracle  # noqa: F401  (headless-rendering defaults)
 from gen import parquet, scenes
 from gen.config import parse
@@ -32,7 +36,7 @@ from gen.spec import EpisodeSpec
 
 
 def ours(n: int, workers: int, referent: str, root: Path) -> tuple[float, Path]:
-    out = root / f"ours-{n}-{workers}"
+    out = root / f"ours-{n}-{workers}-{time.perf_counter_ns()}"
     start = time.perf_counter()
     generate(parse([f"referent={referent}", f"n={n}", f"workers={workers}", f"out={out}", "image_size=128"]), progress=False)
     return time.perf_counter() - start, out
@@ -65,7 +69,6 @@ def floor(dataset: Path) -> float:
 def naive(lengths: list[int], root: Path) -> float:
     """robosuite env.step with camera observations + lerobot's own writer."""
     import robosuite as suite
-    from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
     env = suite.make(
         "Lift",

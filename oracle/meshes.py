@@ -5,12 +5,16 @@ cameras render, most are smaller than a pixel, and on the CPU rasteriser (llvmpi
 about 80% of a frame's cost (README: Performance). Every purely visual mesh (a geom that
 collides with nothing) above `MAX_FACES` triangles is decimated (quadric edge collapse,
 deterministic) to that many and written inline into the MJCF. Collision meshes, and so the
-physics, are untouched; objects are small meshes and stay as they are.
+physics, are untouched; objects are small meshes and stay as they are. Results are cached on
+disk (`~/.cache/deconfound/meshes`, keyed by the file's bytes), since parsing and decimating
+take seconds and every worker process builds its own scene.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -42,9 +46,28 @@ def lighten(root: ET.Element) -> None:
 @functools.cache
 def decimated(file: str) -> tuple[np.ndarray, np.ndarray] | None:
     """(vertices, faces) of the mesh file cut to `MAX_FACES` triangles, or None if it is smaller."""
+    data = Path(file).read_bytes()
+    cache = _cache_dir() / f"{hashlib.sha256(data).hexdigest()[:24]}-{MAX_FACES}.npz"
+    if cache.is_file():
+        with np.load(cache) as npz:
+            return (npz["vertices"], npz["faces"]) if len(npz["faces"]) else None
+    light = _decimate(Path(file))
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    tmp = cache.with_suffix(f".{os.getpid()}.tmp.npz")
+    vertices, faces = light if light is not None else (np.zeros((0, 3)), np.zeros((0, 3), np.int64))
+    np.savez(tmp, vertices=vertices, faces=faces)
+    tmp.replace(cache)
+    return light
+
+
+def _cache_dir() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "deconfound" / "meshes"
+
+
+def _decimate(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
     import fast_simplification
 
-    vertices, faces = _read(Path(file))
+    vertices, faces = _read(path)
     if len(faces) <= MAX_FACES:
         return None
     # Weld vertices that the file repeats per normal/uv, so the surface is connected.
