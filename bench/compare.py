@@ -24,10 +24,6 @@ from pathlib import Path
 
 import numpy as np
 
-# Before any GL context exists: torchvision, which lerobot's writer imports, loads triton, which
-# crashes (SIGSEGV) in a process that has already made an EGL context.
-from ledataset.datasets.lerobot_dataset import LeRobotDataset
-
 import oracle  # noqa: F401  (headless-rendering defaults)
 from gen import parquet, scenes
 from gen.config import parse
@@ -66,7 +62,7 @@ def floor(dataset: Path) -> float:
     return elapsed
 
 
-def naive(lengths: list[int], root: Path) -> float:
+def naive(lengths: list[int], root: Path, LeRobotDataset: type) -> float:  # noqa: N803
     """robosuite env.step with camera observations + lerobot's own writer."""
     import robosuite as suite
 
@@ -112,6 +108,11 @@ def naive(lengths: list[int], root: Path) -> float:
 
 
 def main(argv: list[str]) -> None:
+    # Before any GL context exists: torchvision, which lerobot's writer imports, loads triton, which
+    # crashes (SIGSEGV) in a process that has already made an EGL context. Imported here, not at the
+    # top, so that the generator's worker processes (which re-import this module) stay lean.
+    from ledataset.datasets.lerobot_dataset import LeRobotDataset
+
     opts = dict(a.split("=", 1) for a in argv)
     n = int(opts.get("n", 50))
     referent = opts.get("referent", "object")
@@ -124,7 +125,7 @@ def main(argv: list[str]) -> None:
         lengths = [int(x) for x in parquet.read(dataset / "meta/episodes")["length"]]
         frames = sum(lengths)
         c = floor(dataset)
-        b = naive(lengths, root)
+        b = naive(lengths, root, LeRobotDataset)
         main_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         print(f"{n} {referent} episodes, {frames} frames, 2 cameras at 128 px, {cores} cores")
         print(f"(a) ours, 1 worker      {a1 / n:7.3f} s/episode  {frames / a1:6.1f} frames/s")

@@ -1,8 +1,9 @@
 """One episode from design to writer input, in whichever process runs it.
 
 Demonstrate without cameras, re-realising the poses (same roles) until the oracle's demo
-succeeds or the attempts run out; then replay the verified actions with cameras on, encode
-each camera's frames, and hand the result to the writer.
+succeeds or the attempts run out; then render the verified demo by restoring its recorded
+physics states (no second simulation), encode each camera's frames, and hand the result to the
+writer.
 """
 
 from __future__ import annotations
