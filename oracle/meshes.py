@@ -26,13 +26,15 @@ ROBOT_PREFIXES = ("robot0_", "gripper0_", "fixed_mount0_")
 
 def lighten(root: ET.Element) -> None:
     """Replace the robot's large visual-only meshes in an MJCF tree by decimated inline meshes."""
-    visual_only = {
-        g.get("mesh") for g in root.iter("geom") if g.get("mesh") and g.get("contype") == "0" and g.get("conaffinity") == "0"
-    }
-    collides = {g.get("mesh") for g in root.iter("geom") if g.get("mesh") and g.get("mesh") not in visual_only}
+    used, collides = set(), set()
+    for geom in root.iter("geom"):
+        if geom.get("mesh"):
+            used.add(geom.get("mesh"))
+            if not (geom.get("contype") == "0" and geom.get("conaffinity") == "0"):
+                collides.add(geom.get("mesh"))
     for mesh in root.iter("mesh"):
         name, file = mesh.get("name", ""), mesh.get("file")
-        if not file or not name.startswith(ROBOT_PREFIXES) or name not in visual_only or name in collides:
+        if not file or not name.startswith(ROBOT_PREFIXES) or name not in used or name in collides:
             continue
         light = decimated(file)
         if light is None:
@@ -48,15 +50,20 @@ def decimated(file: str) -> tuple[np.ndarray, np.ndarray] | None:
     """(vertices, faces) of the mesh file cut to `MAX_FACES` triangles, or None if it is smaller."""
     data = Path(file).read_bytes()
     cache = _cache_dir() / f"{hashlib.sha256(data).hexdigest()[:24]}-{MAX_FACES}.npz"
-    if cache.is_file():
+    try:
         with np.load(cache) as npz:
             return (npz["vertices"], npz["faces"]) if len(npz["faces"]) else None
+    except (OSError, ValueError, KeyError):  # absent or damaged: compute it again
+        pass
     light = _decimate(Path(file))
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    tmp = cache.with_suffix(f".{os.getpid()}.tmp.npz")
     vertices, faces = light if light is not None else (np.zeros((0, 3)), np.zeros((0, 3), np.int64))
-    np.savez(tmp, vertices=vertices, faces=faces)
-    tmp.replace(cache)
+    try:  # the cache only saves time: an unwritable home must not stop a run
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        tmp = cache.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, vertices=vertices, faces=faces)
+        tmp.replace(cache)
+    except OSError:
+        pass
     return light
 
 

@@ -87,3 +87,26 @@ def test_cameras_render_distinct_views(scene: Scene) -> None:
     assert frames["agentview"].shape == (64, 64, 3)
     assert frames["agentview"].std() > 10 and frames["wrist"].std() > 5
     assert np.abs(frames["agentview"].astype(int) - frames["wrist"]).mean() > 10
+
+
+def test_robot_visual_meshes_are_light_and_collision_meshes_untouched(scene: Scene) -> None:
+    from oracle.meshes import MAX_FACES
+    from oracle.scene import robot_xml
+
+    full = mujoco.MjModel.from_xml_string(robot_xml())  # the robot as robosuite ships it
+    m = scene.model
+    light, kept = 0, 0
+    for g in range(m.ngeom):
+        body = m.body(m.geom_bodyid[g]).name
+        if m.geom_type[g] != mujoco.mjtGeom.mjGEOM_MESH or not body.startswith(("robot0_", "gripper0_")):
+            continue
+        mesh = m.mesh(m.geom_dataid[g]).name
+        faces = int(m.mesh_facenum[m.geom_dataid[g]])
+        original = int(full.mesh_facenum[full.mesh(mesh).id])
+        if m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0:
+            assert faces == original or faces <= MAX_FACES, mesh
+            light += faces < original
+        else:
+            assert faces == original, f"collision mesh {mesh} changed"
+            kept += 1
+    assert light >= 5 and kept >= 5
