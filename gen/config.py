@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import List, Optional
 
 from gen.cli import UserError, compose_config
+from gen.partial import completed
 from gen.video import CODECS
 from oracle.world import MAX_IMAGE_SIZE, PHYSICS_DT
 
@@ -79,7 +80,7 @@ def validate(cfg: GenConfig) -> None:
     if cfg.out is None:
         cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
     try:
-        check_output(Path(cfg.out), cfg.overwrite)
+        check_output(Path(cfg.out), cfg.overwrite or cfg.resume and completed(Path(cfg.out)) is not None)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
 

@@ -19,10 +19,14 @@ import os
 import pickle
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING, Iterator
 
 from gen import faults
-from gen.produce import Produced
 
+if TYPE_CHECKING:
+    from gen.produce import Produced
+
+GENERATION_PATH = "meta/generation.json"  # written last: its presence marks a dataset complete
 EPISODES = "episodes"
 ASSEMBLED = "dataset"
 
@@ -72,7 +76,7 @@ class Partial:
             faults.point(f"save:{index}")
         tmp.replace(path)
 
-    def episodes(self, n: int):  # noqa: ANN201
+    def episodes(self, n: int) -> Iterator[Produced]:
         for i in range(n):
             with open(self.root / EPISODES / f"{i:06d}.pkl", "rb") as f:
                 yield pickle.load(f)
@@ -86,6 +90,16 @@ class Partial:
     def publish(self) -> None:
         publish(self.dataset, self.out)
         shutil.rmtree(self.root)
+
+
+def completed(out: Path) -> dict | None:
+    """The generation record of a finished dataset or plan at `out`, or None if there is none."""
+    record = out / GENERATION_PATH
+    try:
+        generation = json.loads(record.read_text())
+    except (OSError, ValueError):
+        return None
+    return generation if isinstance(generation, dict) and generation.get("complete") is True else None
 
 
 def publish(built: Path, out: Path) -> None:

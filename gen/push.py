@@ -5,7 +5,7 @@ create the dataset repo, upload the folder in one commit, tag it (`v3.0` for dat
 lerobot's loader finds it; `exam-v1` for exams). The endpoint and token come from the usual
 HF_ENDPOINT / HF_TOKEN / `huggingface-cli login`. It refuses a dataset that is incomplete or
 fails `gen.check`, never prints the token, and when the upload fails says what was and was not
-uploaded: the upload is a single commit, so a retry of the same command is always safe.
+committed: the upload is a single commit, so a retry of the same command is always safe.
 """
 
 from __future__ import annotations
@@ -14,6 +14,10 @@ import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from huggingface_hub import HfApi
 
 IGNORE = [".*", "**/.*", "*.tmp", "**/*.tmp", "*.partial/**"]
 
@@ -60,6 +64,24 @@ def _validate(root: Path) -> str:
     return "v3.0"
 
 
+def _retag(api: HfApi, repo_id: str, tag: str, commit: str) -> None:
+    """Point `tag` at `commit`, moving it if a previous push created it.
+
+    lerobot's loader downloads the `v3.0` revision, so a tag left on an older commit would serve
+    the old data without a word. The hub refuses to create an existing tag (409), so it is deleted
+    first, as lerobot's own push does. Tagging the commit id rather than the branch means a commit
+    landing in between cannot receive the tag.
+    """
+    from huggingface_hub.errors import HfHubHTTPError
+
+    try:
+        api.delete_tag(repo_id, tag=tag, repo_type="dataset")
+    except HfHubHTTPError as exc:
+        if exc.response is None or exc.response.status_code != 404:  # 404: no such tag yet
+            raise
+    api.create_tag(repo_id, tag=tag, revision=commit, repo_type="dataset")
+
+
 def push(root: Path, repo_id: str, private: bool = False, branch: str | None = None) -> Pushed:
     from huggingface_hub import HfApi
     from huggingface_hub.errors import HfHubHTTPError
@@ -86,13 +108,13 @@ def push(root: Path, repo_id: str, private: bool = False, branch: str | None = N
             commit_message=f"Upload {root.name} ({len(files)} files) with deconfound",
         )
         stage = f"tagging {tag}"
-        api.create_tag(repo_id, tag=tag, revision=branch, repo_type="dataset", exist_ok=True)
+        _retag(api, repo_id, tag, commit.oid)
     except (HfHubHTTPError, OSError, ValueError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         if stage == f"tagging {tag}":
-            done = f"all {len(files)} files were uploaded, but the {tag} tag was not created"
+            done = f"all {len(files)} files were committed, but the {tag} tag was not moved to that commit"
         else:
-            done = f"nothing was uploaded ({len(files)} files, {size_mb:.1f} MB pending; the upload is one commit)"
+            done = f"nothing was committed ({len(files)} files, {size_mb:.1f} MB pending; the upload is one commit)"
         raise PushError(f"push to {repo_id} failed while {stage}: {reason}; {done}; rerun the same command to retry") from None
     return Pushed(repo_id, files, commit.oid, tag, str(repo))
 

@@ -22,14 +22,13 @@ from gen import __version__, card, faults, scenes
 from gen.audit import agree, audit
 from gen.cli import UserError
 from gen.config import GenConfig
-from gen.partial import Partial, publish
+from gen.partial import GENERATION_PATH, Partial, completed, publish
 from gen.plan import designs, realize
 from gen.spec import EpisodeSpec, SimSettings
 from oracle.world import ACTION_NAMES, STATE_NAMES
 from referents import Referent, UnknownReferent
 from referents.base import ReferentSpecError
 
-GENERATION_PATH = "meta/generation.json"
 AUDIT_PATH = "meta/audit.json"
 
 
@@ -43,8 +42,11 @@ class Summary:
     verdict: str
     plan_only: bool = False
     exam: bool = False
+    already_complete: bool = False
 
     def __str__(self) -> str:
+        if self.already_complete:
+            return f"{self.out} is already complete ({self.episodes} episodes, same options); nothing to do"
         if self.exam:
             return (
                 f"wrote an exam of {self.episodes} oracle-solvable trials to {self.out} in {self.seconds:.1f} s\n"
@@ -102,15 +104,32 @@ def check_audit(report: dict) -> None:
 
 def run_record(cfg: GenConfig) -> dict:
     """The options that determine a dataset's bytes: a resumed run must match them."""
-    keep = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attempts", "spec", "objects_per_scene")
+    keep = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attempts", "spec", "objects_per_scene", "plan_only")
     record = {k: getattr(cfg, k) for k in keep} | overrides(cfg) | {"generator_version": __version__}
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
 
 
+def _already_complete(cfg: GenConfig, out: Path, generation: dict) -> Summary:
+    """`resume=true` on a finished run (a requeued job that had in fact completed): a no-op when
+    the options match, refused naming the first option that differs otherwise."""
+    recorded, wanted = generation.get("run") or {}, run_record(cfg)
+    changed = [k for k in wanted if recorded.get(k) != wanted[k]]
+    if changed:
+        name = "spec" if changed[0] == "spec_text" else changed[0]
+        raise UserError(
+            f"resume=true, but the complete dataset at out={out} was made with another {name} "
+            f"({recorded.get(changed[0], 'unrecorded')!r}, not {wanted[changed[0]]!r}); pass overwrite=true to replace it"
+        )
+    return Summary(out, generation["episodes"], 0, 0, 0.0, "", already_complete=True)
+
+
 def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     start = time.perf_counter()
+    out = Path(cfg.out or f"datasets/{cfg.referent}")
+    if cfg.resume and not cfg.overwrite and cfg.split == "train" and (generation := completed(out)) is not None:
+        return _already_complete(cfg, out, generation)
     referent = load_referent(cfg)
     sim = sim_settings(cfg)
     try:
@@ -120,7 +139,6 @@ def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     planned = [realize(referent, d, i, cfg.seed, sim, split=cfg.split) for i, d in enumerate(plan)]
     audits: dict = {"planned": audit(referent, planned)}
     check_audit(audits["planned"])
-    out = Path(cfg.out or f"datasets/{referent.name}")
     if cfg.split == "exam" or cfg.plan_only:
         return _quick(cfg, referent, sim, plan, planned, audits, out, start, progress)
     partial = Partial(out)
@@ -276,6 +294,7 @@ def _write_generation(root: Path, cfg: GenConfig, referent: Referent, summary: S
         "config": asdict(cfg),
         "referent_spec": asdict(referent.config),
         "plan_only": cfg.plan_only,
+        "run": run_record(cfg),
         "complete": True,
         "referent_spec_hash": card.spec_hash(referent),
         "episodes": summary.episodes,

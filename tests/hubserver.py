@@ -1,8 +1,9 @@
 """A small Hugging Face-compatible hub on loopback, for the push tests.
 
 It answers the HTTP endpoints `huggingface_hub` uses to create a dataset repo, upload a folder
-in one commit (every file as a regular, inline blob), create tags and branches, describe a
-revision and serve files, and it records every request so tests can check what was sent.
+in one commit (every file as a regular, inline blob), create and delete tags (creating an
+existing one is refused with 409, as the real hub does), create branches, describe a revision
+and serve files, and it records every request so tests can check what was sent.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ class Repo:
     files: dict[str, bytes] = field(default_factory=dict)
     commits: list[str] = field(default_factory=list)
     refs: dict[str, str] = field(default_factory=dict)  # branch or tag -> commit
+    tags: set[str] = field(default_factory=set)
     snapshots: dict[str, dict[str, bytes]] = field(default_factory=dict)  # commit -> files
 
 
@@ -86,6 +88,10 @@ class Hub:
                 self._record(body)
                 self._route(body)
 
+            def do_DELETE(self) -> None:  # noqa: N802
+                self._record()
+                self._route()
+
             def _route(self, body: bytes = b"") -> None:
                 parts = [unquote(p) for p in urlparse(self.path).path.strip("/").split("/")]
                 if parts[:2] == ["api", "validate-yaml"]:
@@ -140,11 +146,19 @@ class Hub:
                     repo.commits.append(sha)
                     repo.files = files
                     return self._reply(200, {"commitUrl": f"{hub.url}/datasets/{repo_id}/commit/{sha}", "commitOid": sha})
-                if action == "tag":
+                if action == "tag" and self.command == "DELETE":
+                    if rest[0] not in repo.tags:
+                        return self._reply(404, {"error": "Revision not found"}, {"X-Error-Code": "RevisionNotFound"})
+                    repo.tags.discard(rest[0])
+                    del repo.refs[rest[0]]
+                    return self._reply(200, {})
+                if action == "tag":  # POST .../tag/<branch, tag or commit id>
                     tag = json.loads(body)["tag"]
                     if tag in repo.refs:
                         return self._reply(409, {"error": "tag exists"})
-                    repo.refs[tag] = repo.refs.get(rest[0] if rest else "main", "")
+                    revision = rest[0] if rest else "main"
+                    repo.refs[tag] = repo.refs.get(revision, revision)
+                    repo.tags.add(tag)
                     return self._reply(200, {})
                 if action == "branch":
                     repo.refs.setdefault(rest[0], repo.refs.get("main", ""))

@@ -70,11 +70,47 @@ def test_failed_upload_says_what_happened_and_retry_works(object_dataset: Path) 
         hub.fail_commits = 1
         failed = _push(hub, object_dataset, "repo_id=lab/flaky")
         assert failed.returncode == 1 and len(failed.stderr.strip().splitlines()) == 1
-        assert "failed while uploading" in failed.stderr and "nothing was uploaded" in failed.stderr and "retry" in failed.stderr
+        assert "failed while uploading" in failed.stderr and "nothing was committed" in failed.stderr and "retry" in failed.stderr
         assert TOKEN not in failed.stderr and not hub.repos["lab/flaky"].files
         retried = _push(hub, object_dataset, "repo_id=lab/flaky")
         assert retried.returncode == 0, retried.stderr
         assert set(hub.repos["lab/flaky"].files) == _local_files(object_dataset)
+
+
+def _pull(hub: Hub, repo_id: str, revision: str, into: Path) -> set[str]:
+    """What a loader gets for `revision`: the files, downloaded the way lerobot does."""
+    code = (
+        "from huggingface_hub import snapshot_download;"
+        f"snapshot_download({repo_id!r}, repo_type='dataset', revision={revision!r}, local_dir={str(into)!r})"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, env=_env(hub), capture_output=True)
+    return _local_files(into) - {f for f in _local_files(into) if f.startswith(".cache/")}
+
+
+def _same_bytes(a: Path, b: Path, files: set[str]) -> bool:
+    return all((a / f).read_bytes() == (b / f).read_bytes() for f in files)
+
+
+@pytest.mark.parametrize("kind", ["dataset", "exam"])
+def test_a_second_push_moves_the_tag_to_the_new_data(kind: str, tmp_path: Path) -> None:
+    from helpers import make_dataset
+
+    extra = ["split=exam", "n=1"] if kind == "exam" else ["n=2"]
+    first = make_dataset(tmp_path / "first", *extra, "image_size=32", "seed=1")
+    second = make_dataset(tmp_path / "second", *extra, "image_size=32", "seed=2")
+    tag = "exam-v1" if kind == "exam" else "v3.0"
+    with Hub() as hub:
+        assert _push(hub, first, "repo_id=lab/again").returncode == 0
+        result = _push(hub, second, "repo_id=lab/again")
+        assert result.returncode == 0, result.stderr
+        repo = hub.repos["lab/again"]
+        assert len(repo.commits) == 2 and repo.refs[tag] == repo.commits[-1] == repo.refs["main"]
+        assert f"commit {repo.commits[-1][:12]}, tag {tag}" in result.stdout
+        pulled = _pull(hub, "lab/again", tag, tmp_path / "pulled")
+    assert pulled == _local_files(second)
+    assert _same_bytes(tmp_path / "pulled", second, pulled) and not _same_bytes(
+        tmp_path / "pulled", first, pulled & _local_files(first)
+    )
 
 
 def test_refuses_incomplete_or_damaged_datasets(object_dataset: Path, tmp_path: Path) -> None:

@@ -90,6 +90,23 @@ def test_resume_refuses_other_options(tmp_path: Path) -> None:
     assert other.returncode == 2 and "used other options (n)" in other.stderr
 
 
+def test_resume_of_a_finished_run_is_a_no_op_and_refuses_other_options(clean: Path, tmp_path: Path) -> None:
+    out = _copy(clean, tmp_path / "ds")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    again = _gen(f"out={out}", "resume=true")
+    assert again.returncode == 0, again.stderr
+    assert "already complete" in again.stdout
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    other = subprocess.run(
+        [sys.executable, "-m", "gen", "n=4", "image_size=32", "seed=5", f"out={out}", "resume=true"],
+        capture_output=True,
+        text=True,
+    )
+    assert other.returncode == 2 and len(other.stderr.strip().splitlines()) == 1
+    assert "another n (3, not 4)" in other.stderr, other.stderr
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
 def test_downstream_refuses_an_incomplete_dataset(tmp_path: Path) -> None:
     out = tmp_path / "ds"
     assert _gen(f"out={out}", crash="finalize").returncode == -9
