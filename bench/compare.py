@@ -25,10 +25,12 @@ from pathlib import Path
 import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults)
-from gen import parquet, scenes
+from core import parquet
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.spec import EpisodeSpec
+from gen import scenes
 from gen.config import parse
 from gen.run import generate
-from gen.spec import EpisodeSpec
 
 
 def ours(n: int, workers: int, referent: str, root: Path) -> tuple[float, Path]:
@@ -50,7 +52,7 @@ def floor(dataset: Path) -> float:
     scene = scene_for(specs[0].assets)
     ik = ArmIK(np.asarray(specs[0].sim.robot_home))
     states = [demonstrate(scene, ik, s, demo_of(s.referent)).states for s in specs]  # not timed
-    cams = Cameras(scene, 128, ("agentview", "wrist"))
+    cams = Cameras(scene, 128, NATIVE.camera_names)
     start = time.perf_counter()
     for spec, episode in zip(specs, states):
         scene.reset(spec)
@@ -72,31 +74,32 @@ def naive(lengths: list[int], root: Path, LeRobotDataset: type) -> float:  # noq
         has_renderer=False,
         has_offscreen_renderer=True,
         use_camera_obs=True,
-        camera_names=["agentview", "robot0_eye_in_hand"],
+        camera_names=list(NATIVE.cameras.values()),
         camera_heights=128,
         camera_widths=128,
         control_freq=20,
     )
     features = {
-        "observation.images.agentview": {"dtype": "video", "shape": (128, 128, 3), "names": ["height", "width", "channels"]},
-        "observation.images.wrist": {"dtype": "video", "shape": (128, 128, 3), "names": ["height", "width", "channels"]},
-        "observation.state": {"dtype": "float32", "shape": (16,), "names": None},
-        "action": {"dtype": "float32", "shape": (7,), "names": None},
+        **{
+            NATIVE.image_key(c): {"dtype": "video", "shape": (128, 128, 3), "names": ["height", "width", "channels"]}
+            for c in NATIVE.cameras
+        },
+        STATE_KEY: {"dtype": "float32", "shape": (NATIVE.state_size,), "names": None},
+        ACTION_KEY: {"dtype": "float32", "shape": (env.action_dim,), "names": None},
     }
     start = time.perf_counter()
     ds = LeRobotDataset.create("bench/naive", fps=20, features=features, root=root / "naive", use_videos=True)
     for length in lengths:
         obs = env.reset()
         for _ in range(length):
-            action = np.zeros(7, np.float32)
+            action = np.zeros(env.action_dim, np.float32)
             ds.add_frame(
                 {
-                    "observation.images.agentview": obs["agentview_image"],
-                    "observation.images.wrist": obs["robot0_eye_in_hand_image"],
-                    "observation.state": np.concatenate(
+                    **{NATIVE.image_key(c): obs[f"{model}_image"] for c, model in NATIVE.cameras.items()},
+                    STATE_KEY: np.concatenate(
                         [obs["robot0_joint_pos"], obs["robot0_gripper_qpos"], obs["robot0_eef_pos"], obs["robot0_eef_quat"]]
                     ).astype(np.float32),
-                    "action": action,
+                    ACTION_KEY: action,
                     "task": "pick up the cube",
                 }
             )

@@ -13,10 +13,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+from core.exam import read
 from eval.__main__ import take
 from eval.policies import make
 from gen.config import parse
-from gen.exam import read
 from gen.run import generate
 
 

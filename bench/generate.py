@@ -18,11 +18,11 @@ from typing import Any
 
 import gen.produce as produce
 import referents
+from core.layout import NATIVE
+from core.spec import SimSettings
 from gen.lerobot_writer import Layout, LeRobotWriter
 from gen.plan import designs
-from gen.spec import SimSettings
 from oracle.render import Cameras
-from oracle.world import ACTION_NAMES, STATE_NAMES
 
 CLOCKS: dict[str, float] = {"render": 0.0, "encode": 0.0}
 
@@ -51,7 +51,7 @@ def main(argv: list[str]) -> None:
     oracle = record = write = 0.0
     first_try = attempts = frames = 0
     with tempfile.TemporaryDirectory() as tmp:
-        writer = LeRobotWriter(Path(tmp) / "ds", Layout(sim.fps, size, sim.cameras, STATE_NAMES, ACTION_NAMES))
+        writer = LeRobotWriter(Path(tmp) / "ds", Layout(sim.fps, size, sim.cameras, NATIVE.state_names, NATIVE.action_names))
         for i, design in enumerate(plan):
             t0 = time.perf_counter()
             demo, failures = producer.demonstrate(design, i, 0, max_attempts=10)

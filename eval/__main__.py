@@ -27,7 +27,7 @@ def main(argv: list[str]) -> int:
     if not argv or argv[0] in ("-h", "--help", "help"):
         print(USAGE)
         return 0 if argv else 2
-    from gen.exam import ExamError, read
+    from core.exam import ExamError, read
 
     try:
         opts = dict(a.split("=", 1) for a in argv)

@@ -22,13 +22,13 @@ import numpy as np
 from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from eval.policies import JOINT_HIGH, JOINT_LOW
+from core.exam import Exam, read
+from core.layout import NATIVE, STATE_KEY
+from core.spec import EpisodeSpec
+from core.success import Outcome, achieved
 from eval.rollout import check_action, observe
-from gen.exam import Exam, read
-from gen.spec import EpisodeSpec
 from oracle.render import Cameras
 from oracle.scene import scene_for
-from oracle.success import Outcome, achieved
 
 
 class ExamEnv(gym.Env):
@@ -57,13 +57,11 @@ class ExamEnv(gym.Env):
         size = self.episode.sim.image_size
         self.observation_space = spaces.Dict(
             {
-                **{f"observation.images.{c}": spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
-                "observation.state": spaces.Box(-np.inf, np.inf, (16,), np.float32),
+                **{NATIVE.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
+                STATE_KEY: spaces.Box(-np.inf, np.inf, (NATIVE.state_size,), np.float32),
             }
         )
-        self.action_space = spaces.Box(
-            np.append(JOINT_LOW, -1.0).astype(np.float32), np.append(JOINT_HIGH, 1.0).astype(np.float32)
-        )
+        self.action_space = spaces.Box(np.array(NATIVE.action_low, np.float32), np.array(NATIVE.action_high, np.float32))
         self.scene = scene_for(self.episode.assets)
         self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
         self._t = 0

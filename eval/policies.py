@@ -24,12 +24,8 @@ from typing import Protocol
 import numpy as np
 
 import referents
-from gen.spec import EpisodeSpec, TaskSpec
-
-ACTION_SIZE = 8
-# Panda joint ranges (robosuite's model), for the random walk.
-JOINT_LOW = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973])
-JOINT_HIGH = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973])
+from core.layout import ARM_JOINTS, JOINT_HIGH, JOINT_LOW
+from core.spec import EpisodeSpec, TaskSpec
 
 
 @dataclass(frozen=True)
@@ -132,7 +128,7 @@ class Random:
         self._gripper = -1.0
 
     def act(self, observation: dict) -> np.ndarray:
-        self._q = np.clip(self._q + self._rng.normal(0.0, 0.05, 7), JOINT_LOW, JOINT_HIGH)
+        self._q = np.clip(self._q + self._rng.normal(0.0, 0.05, ARM_JOINTS), JOINT_LOW, JOINT_HIGH)
         if self._rng.random() < 0.05:
             self._gripper = -self._gripper
         return np.array([*self._q, self._gripper], np.float32)

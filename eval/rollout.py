@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from eval.policies import ACTION_SIZE, Context, Policy
-from gen.spec import EpisodeSpec
+from core.layout import NATIVE
+from core.spec import EpisodeSpec
+from eval.policies import Context, Policy
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -54,8 +55,8 @@ def check_action(action: object) -> tuple[np.ndarray | None, str | None]:
         a = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError):
         return None, f"action is not numeric ({type(action).__name__})"
-    if a.shape != (ACTION_SIZE,):
-        return None, f"action has shape {a.shape}, expected ({ACTION_SIZE},)"
+    if a.shape != (NATIVE.action_size,):
+        return None, f"action has shape {a.shape}, expected ({NATIVE.action_size},)"
     if not np.all(np.isfinite(a)):
         return None, "action contains NaN or inf"
     return a.astype(np.float32), None

@@ -6,7 +6,7 @@
 that logs end-effector and object positions in its own simulator gets the identical report.
 
 Per rollout, for every alternative of its trial (the original ask and each swap's): whether the
-program's success predicate holds on the final state (oracle/success.py), and the closest
+program's success predicate holds on the final state (core/success.py), and the closest
 approach of the end effector to the alternative's contact point. The rollout *lands* on the
 alternative it achieved, or else on the one it came closest to if that is within the landing
 threshold (5 cm; ties land nowhere).
@@ -38,10 +38,11 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from gen.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
-from gen.rates import Rate
-from gen.spec import EpisodeSpec
-from oracle.success import Outcome, achieved
+from core import catalog, contact
+from core.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
+from core.rates import Rate
+from core.spec import EpisodeSpec
+from core.success import Outcome, achieved
 
 REPORT_VERSION = 1
 POLICY_KEY = b"deconfound.policy"
@@ -51,19 +52,14 @@ class LogError(ValueError):
     """Rollout logs that do not match the exam; the message says how."""
 
 
-def contact_points(spec: EpisodeSpec, geometry: dict, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
-    """(T, 3) positions the end effector reaches for when it does `program` to `target`."""
-
-    def grasp_offset(kind: str) -> float:
-        g = geometry[kind]
-        return -g["bottom"] + g["size"][2] - g["grasp_depth"]
-
+def contact_points(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
+    """(T, 3) positions the end effector reaches for when it does `program` to `target`: the
+    points the oracle's skills go to (core/contact.py)."""
+    kind = catalog.kind(spec.object(target).kind)
     if program == "place":
-        carried = spec.object(spec.task.params["object"]).kind
-        dest = geometry[spec.object(target).kind]
-        lift = -dest["bottom"] + dest["size"][2] + geometry[carried]["size"][2] - geometry[carried]["grasp_depth"]
-        return objects[target] + [0.0, 0.0, lift]
-    return objects[target] + [0.0, 0.0, grasp_offset(spec.object(target).kind)]
+        carried = catalog.kind(spec.object(spec.task.params["object"]).kind)
+        return contact.release_point(kind, objects[target], carried)
+    return contact.grasp_point(kind, objects[target])
 
 
 def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], steps: int | None = None) -> dict:
@@ -76,7 +72,7 @@ def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndar
     alternatives = [(a["target"], a["program"]) for a in json.loads(row["alternatives"])]
     result = {}
     for alt in alternatives:
-        points = contact_points(spec, exam.meta["geometry"], objects, *alt)[: end + 1]
+        points = contact_points(spec, objects, *alt)[: end + 1]
         result[alt] = {
             "achieved": achieved(spec, outcome, *alt),
             "distance": float(np.min(np.linalg.norm(ee[: end + 1] - points, axis=1))),

@@ -18,8 +18,8 @@ from statistics import NormalDist
 
 import pandas as pd
 
-from gen.rates import Rate, wilson
-from gen.spec import EpisodeSpec
+from core.rates import Rate, wilson
+from core.spec import EpisodeSpec
 from referents import Referent
 
 FOLDS = 5

@@ -10,7 +10,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gen import __version__
+from core import __version__
 from gen.config import GenConfig
 from referents import Referent
 
@@ -157,7 +157,7 @@ def exam_command(cfg: GenConfig) -> str:
 
 def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
     """The exam's card: what it tests, its faces, how to take it, and its plan's audit."""
-    from gen.exam import FACES
+    from core.exam import FACES
 
     faces = "\n".join(f"| `{name}` | {text} |" for name, text in FACES.items())
     text = (
@@ -169,7 +169,7 @@ def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary,
 occur in a training split). Each trial holds the pixels, scene and robot pose fixed and changes
 one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit)
 and `trials.parquet` (one row per rollout); the format is documented in `exam.json` and in the
-generator's `gen/exam.py`.
+generator's `core/exam.py`.
 
 | face | meaning |
 |---|---|

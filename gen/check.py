@@ -16,7 +16,8 @@ from pathlib import Path
 import av
 import numpy as np
 
-from gen import parquet, scenes
+from core import parquet
+from gen import scenes
 from gen.stats import vector_stats
 
 

@@ -12,10 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import List, Optional
 
+from core.world import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.cli import UserError, compose_config
 from gen.partial import completed
 from gen.video import CODECS
-from oracle.world import MAX_IMAGE_SIZE, PHYSICS_DT
 
 
 @dataclass

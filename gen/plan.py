@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from gen.spec import EpisodeSpec, SceneObject, SimSettings
-from oracle import catalog
-from oracle.world import TABLE_TOP_Z
+from core import catalog
+from core.spec import EpisodeSpec, SceneObject, SimSettings
+from core.world import TABLE_TOP_Z
 from referents import Referent
 from referents.base import Balance, Design, ReferentSpecError
 

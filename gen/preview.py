@@ -16,8 +16,10 @@ import av
 import cv2
 import numpy as np
 
-from gen import parquet, scenes
-from gen.spec import EpisodeSpec
+from core import parquet
+from core.layout import AGENTVIEW
+from core.spec import EpisodeSpec
+from gen import scenes
 
 TILE = 256
 CAPTION = 54
@@ -75,7 +77,7 @@ def tile(frame: np.ndarray, caption: str) -> np.ndarray:
     return np.concatenate([image, panel], axis=0)
 
 
-def contact_sheet(root: Path, out: Path, n: int = 16, camera: str = "agentview", columns: int = 4) -> Path:
+def contact_sheet(root: Path, out: Path, n: int = 16, camera: str = AGENTVIEW, columns: int = 4) -> Path:
     records = scenes.read(root).head(n)
     specs = [EpisodeSpec.from_json(s) for s in records["spec"]]
     episodes = list(records["episode_index"])
@@ -105,7 +107,7 @@ def main(argv: list[str]) -> int:
         print(f"error: {root} has no {scenes.SCENES_PATH}: not a dataset made by python -m gen", file=sys.stderr)
         return 2
     out = Path(opts.get("out", root / "preview.png"))
-    path = contact_sheet(root, out, int(opts.get("n", 16)), opts.get("camera", "agentview"))
+    path = contact_sheet(root, out, int(opts.get("n", 16)), opts.get("camera", AGENTVIEW))
     print(f"wrote {path}")
     return 0
 

@@ -12,17 +12,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.layout import NATIVE
+from core.spec import EpisodeSpec, SimSettings
+from core.success import Outcome
 from gen.lerobot_writer import Episode
 from gen.plan import realize
-from gen.spec import EpisodeSpec, SimSettings
 from gen.stats import image_histogram
 from gen.video import encode_episode
 from oracle.episode import Demo, demonstrate
 from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
-from oracle.success import Outcome
-from oracle.world import STATE_NAMES
 from referents import Referent
 from referents.base import Design
 
@@ -87,7 +87,7 @@ class Producer:
         spec, actions = demo.spec, demo.actions
         size = self.sim.image_size
         frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.sim.cameras}
-        states = np.empty((len(actions), len(STATE_NAMES)), np.float32)
+        states = np.empty((len(actions), NATIVE.state_size), np.float32)
         self.scene.reset(spec)  # colours and body assignment; the states below carry the rest
         for t, physics in enumerate(demo.states):
             self.scene.set_physics_state(physics)

@@ -46,7 +46,7 @@ def _files(root: Path) -> list[str]:
 def _validate(root: Path) -> str:
     """The tag to push under, once the folder has passed its integrity checks."""
     if (root / "exam.json").is_file():
-        from gen.exam import EXAM_VERSION, ExamError, read
+        from core.exam import EXAM_VERSION, ExamError, read
 
         try:
             read(root)

@@ -18,14 +18,15 @@ from importlib import metadata
 from pathlib import Path
 
 import referents
-from gen import __version__, card, faults, scenes
+from core import __version__
+from core.layout import NATIVE, STATE_KEY, TASK_KEY
+from core.spec import EpisodeSpec, SimSettings
+from gen import card, faults, scenes
 from gen.audit import agree, audit
 from gen.cli import UserError
 from gen.config import GenConfig
 from gen.partial import GENERATION_PATH, Partial, completed, publish
 from gen.plan import designs, realize
-from gen.spec import EpisodeSpec, SimSettings
-from oracle.world import ACTION_NAMES, STATE_NAMES
 from referents import Referent, UnknownReferent
 from referents.base import ReferentSpecError
 
@@ -230,7 +231,7 @@ def _assemble(cfg: GenConfig, sim: SimSettings, partial: Partial, root: Path) ->
     """The LeRobot files, from the episode files, in order."""
     from gen.lerobot_writer import Layout, LeRobotWriter
 
-    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, STATE_NAMES, ACTION_NAMES, cfg.codec))
+    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, NATIVE.state_names, NATIVE.action_names, cfg.codec))
     rows, written = [], []
     for produced in partial.episodes(cfg.n):
         rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
@@ -246,7 +247,7 @@ def _examine(cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, r
     import numpy as np
     from tqdm import tqdm
 
-    from gen import exam
+    from core import exam
     from gen.produce import DemoFailed, Producer
 
     producer = Producer(referent, sim)
@@ -259,7 +260,8 @@ def _examine(cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, r
         producer.scene.reset(demo.spec)
         state = producer.scene.physics_state().astype(np.float64).tolist()
         horizon = int(np.ceil(1.5 * len(demo.actions))) + 20
-        rows += exam.trial_rows(i, demo.spec, referent.alternatives(demo.spec), state, horizon)
+        values = {a.id: a.value for a in referent.alternatives(demo.spec)}
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon)
     exam.write(
         root,
         rows,
@@ -269,12 +271,12 @@ def _examine(cfg: GenConfig, referent: Referent, sim: SimSettings, plan: list, r
             "split": "exam",
             "command": card.command(cfg),
             "observation": {
-                "keys": [f"observation.images.{c}" for c in sim.cameras] + ["observation.state", "task"],
+                "keys": [NATIVE.image_key(c) for c in sim.cameras] + [STATE_KEY, TASK_KEY],
                 "image_size": sim.image_size,
                 "fps": sim.fps,
-                "state_names": list(STATE_NAMES),
-                "action_names": list(ACTION_NAMES),
-                "action": "joint-position targets 1-7 (rad) and gripper command (-1 open, +1 closed), held for 1/fps s",
+                "state_names": list(NATIVE.state_names),
+                "action_names": list(NATIVE.action_names),
+                "action": NATIVE.action_meaning,
             },
             "referent_spec": asdict(referent.config),
             "audit": report,

@@ -21,8 +21,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gen import parquet
-from gen.spec import EpisodeSpec
+from core import parquet
+from core.spec import EpisodeSpec
 
 if TYPE_CHECKING:
     from gen.produce import Produced

@@ -16,8 +16,9 @@ from pathlib import Path
 import av
 import numpy as np
 
-from gen import parquet, scenes
-from gen.spec import EpisodeSpec
+from core import parquet
+from core.spec import EpisodeSpec
+from gen import scenes
 
 FRAME_TOLERANCE = 3.0  # mean |difference| per frame, in 0..255 units
 

@@ -16,9 +16,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from core.spec import SimSettings
 from gen import faults
 from gen.produce import Produced, Producer
-from gen.spec import SimSettings
 from referents.base import Design
 
 MAX_POOL_RESTARTS = 2

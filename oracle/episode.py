@@ -13,19 +13,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gen.spec import EpisodeSpec
+from core.demo import Plan
+from core.layout import NATIVE
+from core.spec import EpisodeSpec
+from core.success import Outcome, succeeded
 from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene
 from oracle.skills import Skills
-from oracle.success import Outcome, succeeded
-
-Plan = Callable[[Skills, EpisodeSpec], None]
 
 
 @dataclass
 class Demo:
     spec: EpisodeSpec
-    actions: np.ndarray  # (T, 8) float32, exactly what was executed
+    actions: np.ndarray  # (T, action size) float32, exactly what was executed
     states: np.ndarray  # (T, S) physics state (mjSTATE_INTEGRATION) before each action
     outcome: Outcome | None  # None when the plan could not be executed (e.g. IK failed)
     success: bool
@@ -44,7 +44,14 @@ def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
     try:
         plan(skills, spec)
     except IKError as exc:
-        return Demo(spec, np.asarray(skills.actions, np.float32).reshape(-1, 8), np.asarray(skills.states), None, False, str(exc))
+        return Demo(
+            spec,
+            np.asarray(skills.actions, np.float32).reshape(-1, NATIVE.action_size),
+            np.asarray(skills.states),
+            None,
+            False,
+            str(exc),
+        )
     outcome = measure(scene, start)
     ok = succeeded(spec, outcome)
     actions, states = np.asarray(skills.actions, np.float32), np.asarray(skills.states)

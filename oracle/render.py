@@ -11,15 +11,15 @@ import atexit
 import mujoco
 import numpy as np
 
+from core.layout import NATIVE
 from oracle.scene import Scene
-from oracle.world import CAMERAS
 
 
 class Cameras:
     def __init__(self, scene: Scene, size: int, cameras: tuple[str, ...]) -> None:
-        unknown = [c for c in cameras if c not in CAMERAS]
+        unknown = [c for c in cameras if c not in NATIVE.cameras]
         if unknown:
-            raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(CAMERAS)}")
+            raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(NATIVE.cameras)}")
         self.scene = scene
         self.cameras = cameras
         self.renderer = mujoco.Renderer(scene.model, size, size)
@@ -37,7 +37,7 @@ class Cameras:
     def render(self) -> dict[str, np.ndarray]:
         """One frame per camera; the arrays are reused by the next call."""
         for cam in self.cameras:
-            self.renderer.update_scene(self.scene.data, camera=CAMERAS[cam], scene_option=self.option)
+            self.renderer.update_scene(self.scene.data, camera=NATIVE.cameras[cam], scene_option=self.option)
             self.renderer.render(out=self._buffers[cam])
         return self._buffers
 

@@ -18,8 +18,10 @@ from functools import lru_cache
 import mujoco
 import numpy as np
 
-from gen.spec import EpisodeSpec, SceneObject
-from oracle import catalog, meshes, world
+from core import catalog, world
+from core.layout import AGENTVIEW, NATIVE
+from core.spec import EpisodeSpec, SceneObject
+from oracle import meshes
 
 # robosuite logs warnings about optional extras at import; they say nothing about our use.
 logging.getLogger("robosuite_logs").addFilter(lambda record: record.levelno >= logging.ERROR)
@@ -98,7 +100,7 @@ def _configure(root: ET.Element) -> None:
     glob.set("offwidth", str(world.MAX_IMAGE_SIZE))
     glob.set("offheight", str(world.MAX_IMAGE_SIZE))
     for cam in root.iter("camera"):
-        if cam.get("name") == "agentview":
+        if cam.get("name") == NATIVE.cameras[AGENTVIEW]:
             cam.set("pos", " ".join(map(str, world.AGENTVIEW_POS)))
             cam.set("quat", " ".join(f"{v:.6f}" for v in _lookat_quat(world.AGENTVIEW_POS, world.AGENTVIEW_LOOKAT)))
             cam.set("fovy", str(world.AGENTVIEW_FOVY))

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from gen.spec import EpisodeSpec
-from oracle import catalog
+from core import catalog, contact
+from core.spec import EpisodeSpec
+from core.success import PUSH_DIRECTION
 from oracle.ik import ArmIK, grasp_yaw
 from oracle.scene import Scene
-from oracle.success import PUSH_DIRECTION
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
@@ -49,7 +49,8 @@ class Skills:
         return np.array([pos[0], pos[1], pos[2] - self._kind(object_id).bottom])
 
     def top_of(self, object_id: str) -> np.ndarray:
-        return self.bottom_of(object_id) + [0.0, 0.0, self._kind(object_id).height]
+        """Centre of the object's top face, from its current simulated pose."""
+        return contact.top(self._kind(object_id), self.scene.object_pos(object_id))
 
     def clearance(self, margin: float = 0.05) -> float:
         """A height at which the hand passes over every object in the scene."""
@@ -90,25 +91,27 @@ class Skills:
     def grasp(self, object_id: str, approach: float = 0.07) -> None:
         """Come down on the object from above, fingers across its narrow axis, and close."""
         kind = self._kind(object_id)
-        top = self.top_of(object_id)
+        pos = self.scene.object_pos(object_id)  # where it stood before the hand came near
+        top = contact.top(kind, pos)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
         yaw = grasp_yaw(axis)
         self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
-        grip = top - [0.0, 0.0, kind.grasp_depth()]
-        self.move_to(grip, yaw)
+        self.move_to(contact.grasp_point(kind, pos), yaw)
         self.close()
-        self.held = (object_id, kind.height - kind.grasp_depth())
+        self.held = (object_id, contact.grip_height(kind))
 
     def lift(self, height: float = 0.15) -> None:
         self.move_to(self.scene.ee_pos() + [0.0, 0.0, height])
         self.hold(2)
 
-    def place(self, destination_id: str, clearance: float = 0.015) -> None:
+    def place(self, destination_id: str) -> None:
         """Carry the held object over the destination, lower it onto it, release, retreat."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
         over = self.top_of(destination_id)
-        release_z = over[2] + self.held[1] + clearance
+        release_z = contact.release_point(
+            self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
+        )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
         self.move_to([over[0], over[1], carry_z])
         self.move_to([over[0], over[1], release_z])

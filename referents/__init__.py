@@ -18,17 +18,14 @@ Adding a type means adding those two files; nothing else changes.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from core.demo import Plan, Skills
+from core.spec import EpisodeSpec
 from referents.base import Alternative, Balance, Design, ReferentConfig, ReferentSpecError, object_alternatives
-
-if TYPE_CHECKING:
-    from gen.spec import EpisodeSpec
-    from oracle.skills import Skills
 
 HERE = Path(__file__).parent
 
@@ -75,7 +72,7 @@ def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
     skills.lift()
 
 
-def demo_of(referent_type: str) -> Callable[[Skills, EpisodeSpec], None]:
+def demo_of(referent_type: str) -> Plan:
     """The oracle's plan for a type's episodes (all a replay needs: no spec file)."""
     return getattr(importlib.import_module(f"referents.{referent_type}"), "demo", pick_and_lift)
 

@@ -15,9 +15,9 @@ from typing import Any, TypeVar
 import numpy as np
 import yaml
 
-from gen.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from oracle import catalog
-from oracle.world import TABLE_SIZE
+from core import catalog
+from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
+from core.world import TABLE_SIZE
 
 T = TypeVar("T")
 CONFOUNDS = ("position",)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Hashable
 
-from gen.spec import EpisodeSpec, SceneObject
+from core.spec import EpisodeSpec, SceneObject
 from referents.base import Alternative, Balance, Design, ReferentConfig, naming_design, object_alternatives
 
 CONFOUNDS = ("position",)

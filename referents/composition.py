@@ -3,7 +3,7 @@ scene. Counterfactuals change one attribute: the size word, or the color word.""
 
 from __future__ import annotations
 
-from gen.spec import Counterfactual
+from core.spec import Counterfactual
 from referents.base import Balance, Design, ReferentConfig, crossed_scene, fill
 
 CONFOUNDS = ("position",)

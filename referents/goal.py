@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Hashable
 
-from gen.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from oracle.skills import Skills
+from core.demo import Skills
+from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from referents.base import Alternative, Balance, Candidate, Design, Placement, ReferentConfig, object_alternatives, slug
 
 

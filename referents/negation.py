@@ -6,7 +6,7 @@ swap the shape word (the other shape's object of the target's color becomes the 
 
 from __future__ import annotations
 
-from gen.spec import Counterfactual
+from core.spec import Counterfactual
 from referents.base import Balance, Design, ReferentConfig, crossed_scene
 
 CONFOUNDS = ("position",)

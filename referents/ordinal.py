@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Hashable
 
-from gen.spec import Counterfactual, EpisodeSpec, SceneObject
+from core.spec import Counterfactual, EpisodeSpec, SceneObject
 from referents.base import Alternative, Balance, Design, Placement, ReferentConfig, object_alternatives
 
 LAST = "last"

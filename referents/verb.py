@@ -7,8 +7,8 @@ are the programs, with object- and position-dependent variables attached to each
 
 from __future__ import annotations
 
-from gen.spec import Counterfactual, EpisodeSpec, TaskSpec
-from oracle.skills import Skills
+from core.demo import Skills
+from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from referents.base import Alternative, Balance, Design, ReferentConfig, choose_scene, object_features
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from core.layout import NATIVE
 from gen.config import parse
 from gen.run import generate
 from oracle.scene import Scene
-from oracle.world import CAMERAS
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:
@@ -25,7 +25,7 @@ def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]
     renderer.enable_segmentation_rendering()
     option = mujoco.MjvOption()
     option.geomgroup[0] = False
-    renderer.update_scene(scene.data, camera=CAMERAS[camera], scene_option=option)
+    renderer.update_scene(scene.data, camera=NATIVE.cameras[camera], scene_option=option)
     seg = renderer.render()
     renderer.close()
     geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]

@@ -14,11 +14,12 @@ import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 import referents
-from gen import parquet, scenes
-from gen.spec import EpisodeSpec
+from core import parquet
+from core.spec import EpisodeSpec
+from core.success import Outcome, succeeded
+from gen import scenes
 from helpers import make_dataset
 from oracle.scene import scene_for
-from oracle.success import Outcome, succeeded
 
 
 @pytest.fixture(scope="module", params=referents.available())

@@ -14,13 +14,14 @@ import numpy as np
 import pytest
 
 import referents
+from core import parquet
+from core.exam import read
+from core.spec import SimSettings
 from eval.__main__ import take
 from eval.policies import Context, make
 from eval.rollout import Runner
-from gen import parquet, scenes
-from gen.exam import read
+from gen import scenes
 from gen.plan import plan
-from gen.spec import SimSettings
 from helpers import make_dataset
 
 

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-from gen import parquet, scenes
-from gen.spec import EpisodeSpec
+from core import parquet
+from core.spec import EpisodeSpec
+from gen import scenes
 from helpers import make_dataset
 
 

@@ -12,11 +12,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import referents
+from core.spec import SimSettings
 from gen.audit import audit
 from gen.cli import UserError
 from gen.config import GenConfig, parse
 from gen.plan import designs, realize
-from gen.spec import SimSettings
 from referents.base import ReferentSpecError
 
 FUZZ = settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])

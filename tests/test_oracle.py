@@ -11,15 +11,16 @@ import numpy as np
 import pytest
 
 import referents
-from gen import parquet, scenes
+from core import parquet
+from core.spec import EpisodeSpec, SimSettings
+from core.success import lifted, succeeded
+from gen import scenes
 from gen.plan import designs, plan, realize
 from gen.produce import Producer
-from gen.spec import EpisodeSpec, SimSettings
 from oracle.episode import demonstrate, replay
 from oracle.ik import DOWN, ArmIK, yaw_matrix
 from oracle.scene import EE_SITE, Scene, scene_for
 from oracle.skills import Skills
-from oracle.success import lifted, succeeded
 
 
 @pytest.fixture(scope="module")

@@ -6,18 +6,28 @@ import subprocess
 import sys
 from collections import Counter
 
+import pytest
+
 import referents
+from core.spec import SimSettings
 from gen.plan import plan
-from gen.spec import SimSettings
+
+SIMULATORS = {"mujoco", "robosuite", "mink"}
 
 
-def test_planning_imports_no_simulator() -> None:
+@pytest.mark.parametrize("referent", referents.available())
+def test_planning_and_the_audit_import_no_simulator(referent: str) -> None:
+    """Plan, exam plan, audit, alternatives and answers of every type, in a fresh interpreter."""
     code = (
-        "import sys, referents; from gen.plan import plan; from gen.spec import SimSettings;"
-        "plan(referents.load('object'), 5, seed=0, sim=SimSettings());"
-        "assert not {'mujoco', 'robosuite'} & set(sys.modules), sorted(sys.modules)"
+        "import sys, referents; from gen.plan import plan; from gen.audit import audit; from core.spec import SimSettings;"
+        f"r = referents.load({referent!r}); specs = plan(r, 12, seed=0, sim=SimSettings());"
+        "plan(r, 4, seed=0, sim=SimSettings(), split='exam'); audit(r, specs);"
+        "[(r.alternatives(s), r.answer(s), r.assets()) for s in specs];"
+        f"loaded = {sorted(SIMULATORS)!r} and set(sys.modules) & {SIMULATORS!r};"
+        "assert not loaded, loaded"
     )
-    subprocess.run([sys.executable, "-c", code], check=True)
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
 
 
 def test_object_roles_are_balanced() -> None:

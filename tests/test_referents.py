@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import referents
+from core.spec import EpisodeSpec, SimSettings
+from core.success import succeeded
 from gen.audit import audit
 from gen.plan import plan
-from gen.spec import EpisodeSpec, SimSettings
 from helpers import visible_bodies
 from oracle.episode import replay
 from oracle.scene import scene_for
-from oracle.success import succeeded
 
 TYPES = referents.available()
 
@@ -84,7 +84,7 @@ def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
 
 
 def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
-    from oracle.success import achieved
+    from core.success import achieved
 
     return achieved(spec, outcome, *spec.choice(cf))
 

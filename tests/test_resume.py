@@ -16,7 +16,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from gen import parquet
+from core import parquet
 
 ARGS = ("n=3", "image_size=32", "seed=5")
 FILES = (

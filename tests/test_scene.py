@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 
 import referents
+from core import catalog
+from core.layout import NATIVE
+from core.spec import SimSettings
+from core.world import TABLE_TOP_Z
 from gen.plan import plan
-from gen.spec import SimSettings
 from helpers import visible_bodies
-from oracle import catalog
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
-from oracle.world import CAMERAS, TABLE_TOP_Z
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +65,7 @@ def test_every_object_is_in_frame_and_parked_ones_are_not(scene: Scene) -> None:
         placed = {b.body_id for b in scene.placed.values()}
         parked = [b for bodies in scene.bodies.values() for b in bodies if b.body_id not in placed]
         assert parked, "the object scene should park some objects"
-        for camera in CAMERAS:
+        for camera in NATIVE.cameras:
             seen = visible_bodies(scene, camera)
             assert not [b for b in parked if seen.get(b.body_id)], f"a parked object shows in {camera}"
 

@@ -7,8 +7,8 @@ import json
 import pytest
 
 import referents
+from core.spec import EpisodeSpec, SimSettings, SpecError
 from gen.plan import plan
-from gen.spec import EpisodeSpec, SimSettings, SpecError
 
 
 @pytest.fixture(scope="module")

@@ -12,14 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from core.exam import read
+from core.layout import NATIVE
 from eval.__main__ import take
 from eval.policies import make
-from gen.exam import read
 from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
 from gen.video import encode_episode
 from helpers import make_dataset
-from oracle.world import ACTION_NAMES, STATE_NAMES
 from train.fit import TrainConfig, fit
 
 
@@ -48,7 +48,7 @@ def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
 
 
 def _synthetic(root: Path, tasks: list[str], cameras: tuple[str, ...] = ("agentview", "wrist"), size: int = 32) -> Path:
-    writer = LeRobotWriter(root, Layout(20, size, cameras, STATE_NAMES, ACTION_NAMES))
+    writer = LeRobotWriter(root, Layout(20, size, cameras, NATIVE.state_names, NATIVE.action_names))
     for task in tasks:
         frames = np.random.default_rng(0).integers(0, 255, (5, size, size, 3), dtype=np.uint8)
         writer.add(

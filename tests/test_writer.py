@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-from gen import parquet
+from core import parquet
 from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram, image_stats
 from gen.video import encode_episode

@@ -17,10 +17,11 @@ from pathlib import Path
 import av
 import numpy as np
 
-from gen import parquet
+from core import parquet
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY
 
-CAMERAS = ("agentview", "wrist")
-STATE_DIM, ACTION_DIM = 16, 8
+CAMERAS = NATIVE.camera_names
+STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
 
 
 class DatasetError(ValueError):
@@ -68,13 +69,13 @@ def check(root: Path, image_size: int | None = None) -> dict:
     if info.get("codebase_version") != "v3.0":
         raise DatasetError(f"{root}: codebase_version {info.get('codebase_version')!r}; training reads v3.0 datasets")
     features = info.get("features", {})
-    needed = {f"observation.images.{c}": None for c in CAMERAS} | {"observation.state": STATE_DIM, "action": ACTION_DIM}
+    needed = {NATIVE.image_key(c): None for c in CAMERAS} | {STATE_KEY: STATE_DIM, ACTION_KEY: ACTION_DIM}
     for key, dim in needed.items():
         if key not in features:
             raise DatasetError(f"{root}: missing feature {key!r}; the tiny policy needs {', '.join(needed)}")
         if dim is not None and list(features[key]["shape"]) != [dim]:
             raise DatasetError(f"{root}: feature {key!r} has shape {features[key]['shape']}, expected [{dim}]")
-    sizes = {tuple(features[f"observation.images.{c}"]["shape"]) for c in CAMERAS}
+    sizes = {tuple(features[NATIVE.image_key(c)]["shape"]) for c in CAMERAS}
     if len(sizes) != 1:
         raise DatasetError(f"{root}: cameras have different image sizes {sorted(sizes)}")
     height, width, _ = sizes.pop()

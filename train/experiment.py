@@ -17,9 +17,9 @@ import sys
 import time
 from pathlib import Path
 
+from core.exam import read
 from eval.__main__ import take
 from gen.config import parse
-from gen.exam import read
 from gen.run import generate
 from train.fit import LoraOptions, TrainConfig, fit
 from train.policy import MODEL_FILE, CheckpointPolicy

@@ -29,10 +29,12 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch import nn  # noqa: E402
 
+from core.layout import NATIVE  # noqa: E402
+
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
-CAMERAS = ("agentview", "wrist")
-STATE_DIM, ACTION_DIM = 16, 8
+CAMERAS = NATIVE.camera_names
+STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
 
 
 @dataclass

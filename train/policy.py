@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from core.layout import NATIVE
 from train.model import CAMERAS, ModelConfig, TinyPolicy
 
 MODEL_FILE = "model.pt"
@@ -91,7 +92,7 @@ class CheckpointPolicy:
         with torch.inference_mode():
             if text not in self._embeddings:
                 self._embeddings[text] = self.model.embed([text])
-            images = {c: torch.from_numpy(np.ascontiguousarray(observation[f"observation.images.{c}"]))[None] for c in CAMERAS}
+            images = {c: torch.from_numpy(np.ascontiguousarray(observation[NATIVE.image_key(c)]))[None] for c in CAMERAS}
             state = torch.from_numpy(np.asarray(observation["observation.state"], np.float32))[None]
             actions, _ = self.model(images, state, self._embeddings[text])
             return self.model.denormalise(actions)[0].numpy()

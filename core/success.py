@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gen.spec import EpisodeSpec
-from oracle import catalog
+from core import catalog
+from core.spec import EpisodeSpec
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
 PUSH_MARGIN = 0.05

@@ -16,27 +16,9 @@ AGENTVIEW_POS = (0.55, 0.0, 1.55)
 AGENTVIEW_LOOKAT = (-0.09, 0.0, 0.86)
 AGENTVIEW_FOVY = 50.0
 
-# Model names of the cameras a dataset records, by feature name.
-CAMERAS = {"agentview": "agentview", "wrist": "robot0_eye_in_hand"}
-
 # Objects not in an episode rest on the floor under the table top, hidden from every camera.
 PARK_X = (-0.24, -0.08, 0.08, 0.24)
 PARK_Y = (-0.3, -0.1, 0.1, 0.3)
 
 PHYSICS_DT = 0.002  # simulation timestep, seconds; control periods are whole multiples of it
 MAX_IMAGE_SIZE = 1024  # largest square frame a renderer may ask for
-
-# The recorded vectors (README: what a dataset holds).
-STATE_NAMES = (
-    *(f"joint{i}" for i in range(1, 8)),
-    "finger_left",
-    "finger_right",
-    "ee_x",
-    "ee_y",
-    "ee_z",
-    "ee_qw",
-    "ee_qx",
-    "ee_qy",
-    "ee_qz",
-)
-ACTION_NAMES = (*(f"joint{i}_target" for i in range(1, 8)), "gripper")

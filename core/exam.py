@@ -15,7 +15,7 @@ Columns of trials.parquet:
   row (int, unique), trial (int), face (str), variant (int: 0 for task/occ/nonsense, 1.. for
   swaps), instruction (str), target (str: the object asked for), program (str: pick | push |
   place), original_target (str), original_program (str), occluded (bool), spec (JSON: the
-  trial's episode spec, see gen/spec.py), scene_hash (str), initial_state (list[float]: MuJoCo
+  trial's episode spec, see core/spec.py), scene_hash (str), initial_state (list[float]: MuJoCo
   mjSTATE_INTEGRATION), max_steps (int: rollout horizon at the exam's fps), alternatives (JSON:
   `[{"target", "program"}]`, the original first: what the instruction chooses among), slot
   (int: slot of the object asked for), value (str: what the instruction calls it).
@@ -37,10 +37,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gen import __version__, parquet
-from gen.spec import EpisodeSpec, SpecError
-from oracle import catalog, success
-from referents.base import Alternative
+from core import __version__, catalog, contact, parquet, success
+from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
 EXAM_VERSION = 1
@@ -74,7 +72,8 @@ def scoring() -> dict[str, Any]:
         "reach_thresholds": list(REACH_THRESHOLDS),
         "grazing_band": list(REACH_THRESHOLDS),
         "contact_point": "pick/push: the object's grasp point (top centre minus grasp_depth); place: the destination's "
-        "top centre raised by the carried object's height minus its grasp_depth",
+        "top centre raised by the carried object's height minus its grasp_depth, plus "
+        f"{contact.PLACE_CLEARANCE} m release clearance",
     }
 
 
@@ -86,11 +85,15 @@ def geometry() -> dict[str, dict[str, Any]]:
 
 
 def trial_rows(
-    trial: int, spec: EpisodeSpec, alternatives: list[Alternative], initial_state: list[float], max_steps: int
+    trial: int, spec: EpisodeSpec, values_by_id: dict[str, str], initial_state: list[float], max_steps: int
 ) -> list[dict]:
-    """The rollouts of one trial: task, a swap per alternative, occ, nonsense."""
+    """The rollouts of one trial: task, a swap per alternative, occ, nonsense.
+
+    `values_by_id` says what the instruction calls each alternative (an object id, or a
+    program for verb-like types).
+    """
     objects = {o.id for o in spec.objects}
-    values = {((a.id, spec.task.program) if a.id in objects else (spec.target, a.id)): a.value for a in alternatives}
+    values = {((i, spec.task.program) if i in objects else (spec.target, i)): v for i, v in values_by_id.items()}
     original = {"target": spec.target, "program": spec.task.program}
     alternatives = [original] + [{"target": t, "program": p} for t, p in (spec.choice(c) for c in spec.counterfactuals)]
     common = {

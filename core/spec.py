@@ -13,6 +13,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from core.layout import NATIVE
+
 SPEC_VERSION = 1
 
 # The robot's joint-space home pose (robosuite's Panda init_qpos): every episode starts here.
@@ -57,7 +59,7 @@ class Counterfactual:
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """What the oracle must do and how success is judged (see oracle/success.py)."""
+    """What the oracle must do and how success is judged (see core/success.py)."""
 
     program: str = "pick"
     lift_margin: float = 0.05
@@ -70,7 +72,7 @@ class SimSettings:
 
     image_size: int = 128
     fps: int = 20
-    cameras: tuple[str, ...] = ("agentview", "wrist")
+    cameras: tuple[str, ...] = NATIVE.camera_names
     robot_home: tuple[float, ...] = PANDA_HOME
 
 

@@ -1,0 +1,10 @@
+"""The simulator-free core at the bottom of the import graph.
+
+Plain data and pure functions every other layer speaks: the episode spec (`spec`), the
+recorded features (`layout`), the fixed world (`world`), the object catalog (`catalog`), the
+contact geometry (`contact`) and success predicates (`success`), the exam format (`exam`),
+rates with intervals (`rates`) and parquet reading (`parquet`). Nothing here imports MuJoCo,
+robosuite or mink, nor any package above it (referents, oracle, gen, eval, train).
+"""
+
+__version__ = "0.1.0"

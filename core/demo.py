@@ -1,0 +1,30 @@
+"""What a demonstration is written in: the skill API, as referents see it.
+
+A referent type's `demo(skills, spec)` is a few lines over these skills (ManiSkill's
+motion-planning solutions read the same way); the oracle (oracle/skills.py) implements them on
+a simulated scene. Declaring the API here keeps referents free of any simulator import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+from core.spec import EpisodeSpec
+
+
+class Skills(Protocol):
+    def grasp(self, object_id: str) -> None:
+        """Come down on the object from above and close the fingers on it."""
+
+    def lift(self, height: float = 0.15) -> None:
+        """Raise the hand (and whatever it holds) straight up by `height` metres."""
+
+    def place(self, destination_id: str) -> None:
+        """Carry the held object over the destination, lower it onto it, release."""
+
+    def push(self, object_id: str) -> None:
+        """Slide the object along the table, away from the robot."""
+
+
+Plan = Callable[[Skills, EpisodeSpec], None]

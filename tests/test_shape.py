@@ -1,0 +1,43 @@
+"""The code's shape: imports run one way, down, and feature names live in one module."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+from core.layout import LAYOUTS
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPT = ROOT / "scripts/import_graph.py"
+PACKAGES = ("core", "referents", "oracle", "gen", "eval", "train", "bench")
+
+
+def test_no_import_runs_upward() -> None:
+    result = subprocess.run([sys.executable, str(SCRIPT), "--check"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout
+
+
+def test_the_readme_shows_the_current_import_graph() -> None:
+    sys.path.insert(0, str(SCRIPT.parent))
+    try:
+        import import_graph
+    finally:
+        sys.path.remove(str(SCRIPT.parent))
+    assert import_graph.readme_block(import_graph.imports()) in (ROOT / "README.md").read_text()
+
+
+def test_camera_names_and_feature_keys_live_only_in_the_layout_module() -> None:
+    names = set()
+    for layout in LAYOUTS.values():
+        names |= {*layout.cameras, *layout.cameras.values(), *layout.image_keys}
+    found = []
+    for package in PACKAGES:
+        for path in (ROOT / package).rglob("*.py"):
+            if path == ROOT / "core/layout.py":
+                continue
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+                    found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.value!r}")
+    assert not found, "\n".join(found)
