@@ -1,44 +1,34 @@
-"""`python -m gen referent=object n=20 seed=0 out=datasets/object image_size=128 fps=20`."""
+"""Generate a deconfounded LeRobot v3.0 dataset (or, with split=exam, an exam) from a referent spec.
+
+python -m gen referent=object n=20 seed=0 out=datasets/object image_size=128 fps=20
+"""
 
 from __future__ import annotations
 
 import sys
 
-from gen.cli import UserError, usage
-from gen.config import GenConfig, parse
-
-USAGE = usage("python -m gen", GenConfig)
+from gen.cli import Failed, main
+from gen.config import GenConfig, validate
 
 
-def main(argv: list[str]) -> int:
-    if any(a in ("-h", "--help", "help") for a in argv):
-        print(USAGE)
-        return 0
+def generate(cfg: GenConfig) -> None:
+    validate(cfg)
+    from gen.run import generate  # the simulator stack loads only for valid input
+
     try:
-        cfg = parse(argv)
-        from gen.run import generate  # the simulator stack loads only for valid input
-
         summary = generate(cfg)
-        if cfg.push_to_hub:
-            from gen.push import PushError, push
-
-            print(summary)
-            try:
-                pushed = push(summary.out, cfg.repo_id or "")
-            except PushError as exc:
-                print(f"error: {exc}", file=sys.stderr)
-                return 1
-            print(f"pushed {len(pushed.files)} files to {pushed.url} (tag {pushed.tag})")
-            return 0
-    except UserError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
-        print("error: interrupted; nothing was written to out", file=sys.stderr)
-        return 130
+        raise KeyboardInterrupt("interrupted; nothing was written to out") from None
     print(summary)
-    return 0
+    if cfg.push_to_hub:
+        from gen.push import PushError, push
+
+        try:
+            pushed = push(summary.out, cfg.repo_id or "")
+        except PushError as exc:
+            raise Failed(str(exc)) from None
+        print(f"pushed {len(pushed.files)} files to {pushed.url} (tag {pushed.tag})")
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m gen", GenConfig, generate, doc=__doc__))

@@ -1,31 +1,54 @@
-"""Hydra overrides (`key=value`) over a typed config, with one-line errors.
+"""The one command-line layer: `key=value` options over a typed dataclass, for every entry point.
 
-Shared by the command lines (`python -m gen`, `python -m train`): every problem with the input
-becomes a `UserError` whose message is one line naming the option.
+Each command (`python -m gen`, `gen.check`, `eval`, `train`, the benches...) declares its options
+as a dataclass (a trailing `# comment` on a field is its help) and hands it with a function to
+`main`, which gives them all the same behaviour:
+
+* `--help` (or `-h`, `help`) prints the usage, the docstring's first paragraph and every option
+  with its default and help, and exits 0;
+* bad input — an unknown or malformed option, a wrong type, a missing required value, anything
+  the command raises as `UserError` — prints one line `error: ...` and exits 2, before any work;
+* a run that fails (`Failed`) prints one line and exits 1; Ctrl-C exits 130.
+
+Parsing is Hydra's override grammar (`key=value`, `a.b=value`, `'list=[x,y]'`), so values are
+typed and checked by OmegaConf. A command may take one positional argument (e.g. the dataset
+folder of `gen.check`), given plainly or as `name=value`.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+import inspect
+import re
+import sys
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from hydra import compose, initialize
 from hydra.core.config_store import ConfigStore
 from hydra.errors import HydraException, OverrideParseException
 from omegaconf import OmegaConf
-from omegaconf.errors import OmegaConfBaseException
+from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
+
+T = TypeVar("T")
+HELP_FLAGS = ("-h", "--help", "help")
 
 
 class UserError(Exception):
-    """Bad input: the message is shown to the user as is."""
+    """Bad input: the message is shown to the user as is (exit 2)."""
 
 
-def compose_config(name: str, schema: type, argv: list[str]) -> Any:
+class Failed(Exception):
+    """The input was fine but the run failed: the message is shown as is (exit 1)."""
+
+
+def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
     """`argv` overrides applied to the dataclass `schema` -> an instance of it."""
     ConfigStore.instance().store(name=name, node=schema)
     try:
         with initialize(version_base=None, config_path=None):
             cfg = compose(config_name=name, overrides=argv)
-        return OmegaConf.to_object(cfg)
+        return OmegaConf.to_object(cfg)  # type: ignore[return-value]
     except (HydraException, OmegaConfBaseException, ValueError, TypeError) as exc:
         raise UserError(_one_line(exc, schema)) from None
 
@@ -34,18 +57,97 @@ def _one_line(exc: BaseException, schema: type) -> str:
     text = str(exc).strip()
     if isinstance(exc, OverrideParseException):
         return f"cannot parse the option {exc.override!r}: write options as key=value"
+    if isinstance(exc, MissingMandatoryValue):
+        return f"missing option {exc.full_key}=..."
     if "Could not override" in text or "not in struct" in text or f"not in '{schema.__name__}'" in text:
         key = text.split("'")[1] if "'" in text else text
-        return f"unknown option {key!r}; options: {', '.join(schema.__dataclass_fields__)}"
+        return f"unknown option {key!r}; options: {', '.join(f.name for f in dataclasses.fields(schema))}"
     cause = exc.__cause__ or exc.__context__
     inner = cause if isinstance(cause, OmegaConfBaseException) else exc
+    if isinstance(inner, MissingMandatoryValue):
+        return f"missing option {inner.full_key}=..."
     key = getattr(inner, "full_key", None)
     message = str(inner).strip().splitlines()[0] if str(inner).strip() else text.splitlines()[0]
     return f"{key}: {message}" if key else message
 
 
-def usage(command: str, schema: type) -> str:
-    fields = schema.__dataclass_fields__.values()
-    return f"usage: {command} [key=value ...]\n\noptions (default):\n" + "\n".join(
-        f"  {f.name}={f.default if not callable(f.default_factory) else f.default_factory()}" for f in fields
-    )
+def _helps(schema: type) -> dict[str, str]:
+    """Field name -> the trailing comment on its line in the class source."""
+    try:
+        source = inspect.getsource(schema)
+    except (OSError, TypeError):
+        return {}
+    return {m[1]: m[2].strip() for m in re.finditer(r"^\s+(\w+)\s*:[^#\n]*#\s*(.*)$", source, re.M)}
+
+
+def _options(schema: type, prefix: str = "") -> list[tuple[str, str]]:
+    """(`name=default`, help) for every option, nested dataclasses flattened to `a.b`."""
+    helps, rows = _helps(schema), []
+    for f in dataclasses.fields(schema):
+        if f.default is not dataclasses.MISSING:
+            default: Any = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            rows.append((f"{prefix}{f.name}=...", f"{helps.get(f.name, '')} (required)".strip()))
+            continue
+        if dataclasses.is_dataclass(default):
+            rows += _options(type(default), f"{prefix}{f.name}.")
+        else:
+            shown = "" if default is None else str(default).lower() if isinstance(default, bool) else default
+            rows.append((f"{prefix}{f.name}={shown}", helps.get(f.name, "")))
+    return rows
+
+
+def usage(command: str, schema: type, doc: str = "", positional: str | None = None) -> str:
+    head = f"usage: {command}{f' <{positional}>' if positional else ''} [key=value ...]"
+    summary = inspect.cleandoc(doc).split("\n\n")[0] if doc else ""
+    rows = [(k, h) for k, h in _options(schema) if not (positional and k.split("=")[0] == positional)]
+    width = max((len(k) for k, _ in rows), default=0)
+    lines = [f"  {k:<{width}}  {h}".rstrip() for k, h in rows]
+    return "\n\n".join(part for part in (head, summary, "options (default):\n" + "\n".join(lines)) if part)
+
+
+def parse(command: str, schema: type[T], argv: list[str], positional: str | None = None) -> T:
+    """`argv` -> the options, or `UserError` naming the problem."""
+    value = None
+    if positional:
+        plain = [a for a in argv if "=" not in a]
+        if len(plain) > 1:
+            raise UserError(f"one <{positional}> expected, got {len(plain)}: {' '.join(plain)}")
+        value = plain[0] if plain else None
+        argv = [a for a in argv if "=" in a]
+    options = compose_config(schema.__name__, schema, argv)
+    if positional:
+        if value is not None:
+            setattr(options, positional, value)
+        if getattr(options, positional) in (None, ""):
+            raise UserError(f"missing <{positional}>: {usage(command, schema, positional=positional).splitlines()[0]}")
+    return options
+
+
+def main(
+    command: str,
+    schema: type[T],
+    run: Callable[[T], int | None],
+    argv: list[str] | None = None,
+    *,
+    doc: str = "",
+    positional: str | None = None,
+) -> int:
+    """Parse `argv` (default: sys.argv[1:]) into `schema` and call `run`; returns the exit code."""
+    argv = sys.argv[1:] if argv is None else argv
+    if any(a in HELP_FLAGS for a in argv):
+        print(usage(command, schema, doc, positional))
+        return 0
+    try:
+        return int(run(parse(command, schema, argv, positional)) or 0)
+    except UserError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except Failed as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as exc:
+        print(f"error: {exc or 'interrupted'}", file=sys.stderr)
+        return 130
