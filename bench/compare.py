@@ -1,6 +1,6 @@
 """Our generator against the naive path and against the render-only floor, on the same episodes.
 
-    python bench/compare.py [n=50] [sizes=10,50,200] [referent=object]
+    python bench/compare.py [n=50] ['sizes=[10,50,200]'] [referent=object]
 
 (a) ours: `python -m gen` (plan, oracle demos, render from the recorded states, per-episode
     encoding, LeRobot files), with 1 worker and with the machine's cores;
@@ -20,6 +20,7 @@ import resource
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,7 @@ from core import parquet
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
 from gen import scenes
+from gen.cli import UserError, main
 from gen.config import parse
 from gen.run import generate
 
@@ -110,15 +112,22 @@ def naive(lengths: list[int], root: Path, LeRobotDataset: type) -> float:  # noq
     return time.perf_counter() - start
 
 
-def main(argv: list[str]) -> None:
+@dataclass
+class CompareOptions:
+    n: int = 50  # episodes for (a), (b) and (c)
+    sizes: list[int] = field(default_factory=lambda: [10, 50, 200])  # values of n to time (a) at with every core
+    referent: str = "object"  # a referent type (referents/<type>.yaml)
+
+
+def compare(options: CompareOptions) -> None:
+    if min(options.sizes, default=1) < 1:
+        raise UserError(f"sizes must be positive numbers of episodes, got {options.sizes}")
     # Before any GL context exists: torchvision, which lerobot's writer imports, loads triton, which
     # crashes (SIGSEGV) in a process that has already made an EGL context. Imported here, not at the
     # top, so that the generator's worker processes (which re-import this module) stay lean.
     from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-    opts = dict(a.split("=", 1) for a in argv)
-    n = int(opts.get("n", 50))
-    referent = opts.get("referent", "object")
+    n, referent = options.n, options.referent
     cores = os.cpu_count() or 1
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -138,10 +147,10 @@ def main(argv: list[str]) -> None:
         print(f"(b)/(a): {b / a1:.2f} with 1 worker, {b / a_all:.2f} with {cores}")
         print(f"(a)/(c): {a1 / c:.3f} (1 process each)")
         print(f"peak RSS: worker processes {child_rss:.0f} MB (max over workers), this process {main_rss:.0f} MB")
-        for size in [int(s) for s in opts.get("sizes", "10,50,200").split(",")]:
+        for size in options.sizes:
             seconds, _ = ours(size, cores, referent, root)
             print(f"n={size:<4} ours with {cores} workers: {seconds:7.1f} s wall, {seconds / size:.2f} s/episode")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    sys.exit(main("python bench/compare.py", CompareOptions, compare, doc=__doc__))

@@ -1,6 +1,6 @@
 """Battery throughput: rollouts per minute for the reference policies.
 
-    python bench/eval.py [trials=40] [referent=object] [policies=oracle,random] [workers=1,2]
+    python bench/eval.py [trials=40] [referent=object] ['policies=[oracle,random]'] ['workers=[1,2]']
 
 Builds an exam (trials x (task + swaps + occ + nonsense) rollouts), takes it with each policy
 at each worker count, and prints rollouts/min. Reference policies read no cameras, so this is
@@ -11,28 +11,46 @@ from __future__ import annotations
 
 import sys
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
 
+# `python bench/eval.py` puts bench/ first on the path, where this file would shadow the eval package.
+if sys.path[0] == str(Path(__file__).resolve().parent):
+    sys.path.pop(0)
+
 from core.exam import read
-from eval.__main__ import take
-from eval.policies import make
+from eval.battery import take
+from eval.policies import PolicyError
+from eval.registry import make
+from gen.cli import UserError, main
 from gen.config import parse
 from gen.run import generate
 
 
-def main(argv: list[str]) -> None:
-    opts = dict(a.split("=", 1) for a in argv)
-    trials = int(opts.get("trials", 40))
-    referent = opts.get("referent", "object")
+@dataclass
+class BenchOptions:
+    trials: int = 40  # exam trials (each one task + swaps + occ + nonsense rollouts)
+    referent: str = "object"  # a referent type (referents/<type>.yaml)
+    policies: list[str] = field(default_factory=lambda: ["oracle", "random"])  # policies to time (see eval/policies.py)
+    workers: list[int] = field(default_factory=lambda: [1, 2])  # worker counts to time each policy at
+
+
+def bench(options: BenchOptions) -> None:
+    if min(options.workers, default=1) < 1:
+        raise UserError(f"workers must be at least 1, got {options.workers}")
+    try:
+        policies = {name: make(name) for name in options.policies}
+    except PolicyError as exc:
+        raise UserError(str(exc)) from None
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp) / "exam"
-        generate(parse([f"referent={referent}", f"n={trials}", "split=exam", f"out={root}"]), progress=False)
+        generate(parse([f"referent={options.referent}", f"n={options.trials}", "split=exam", f"out={root}"]), progress=False)
         exam = read(root)
-        print(f"{referent} exam: {trials} trials, {len(exam.trials)} rollouts")
+        print(f"{options.referent} exam: {options.trials} trials, {len(exam.trials)} rollouts")
         print(f"{'policy':<10}{'workers':>8}{'seconds':>9}{'rollouts/min':>14}{'task':>7}{'obeyed':>8}")
-        for name in opts.get("policies", "oracle,random").split(","):
-            for workers in (int(w) for w in opts.get("workers", "1,2").split(",")):
-                report, seconds = take(exam, exam.trials, make(name), Path(tmp) / f"{name}-{workers}", workers, name)
+        for name, policy in policies.items():
+            for workers in options.workers:
+                report, seconds = take(exam, exam.trials, policy, Path(tmp) / f"{name}-{workers}", workers, name)
                 f = report["faces"]
                 print(
                     f"{name:<10}{workers:>8}{seconds:>9.1f}{60 * len(exam.trials) / seconds:>14.1f}"
@@ -41,4 +59,4 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    sys.exit(main("python bench/eval.py", BenchOptions, bench, doc=__doc__))

@@ -13,15 +13,16 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import gen.produce as produce
-import referents
 from core.layout import NATIVE
-from core.spec import SimSettings
+from gen.cli import main
+from gen.config import GenConfig, validate
 from gen.lerobot_writer import Layout, LeRobotWriter
-from gen.plan import designs
+from gen.plan import designs, load_referent, sim_settings
 from oracle.render import Cameras
 
 CLOCKS: dict[str, float] = {"render": 0.0, "encode": 0.0}
@@ -38,20 +39,25 @@ def timed(name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
-def main(argv: list[str]) -> None:
-    opts = dict(a.split("=", 1) for a in argv)
-    n = int(opts.get("n", 50))
-    size = int(opts.get("image_size", 128))
-    ref = referents.load(opts.get("referent", "object"))
-    sim = SimSettings(image_size=size)
-    produce.encode_episode = timed("encode", produce.encode_episode)  # type: ignore[assignment]
-    Cameras.render = timed("render", Cameras.render)  # type: ignore[method-assign]
-    producer = produce.Producer(ref, sim)
-    plan = designs(ref, n, seed=0)
-    oracle = record = write = 0.0
-    first_try = attempts = frames = 0
+@dataclass
+class BenchOptions:
+    n: int = 50  # episodes
+    referent: str = "object"  # a referent type (referents/<type>.yaml)
+    image_size: int = 128  # square camera frames, pixels
+
+
+def bench(options: BenchOptions) -> None:
     with tempfile.TemporaryDirectory() as tmp:
-        writer = LeRobotWriter(Path(tmp) / "ds", Layout(sim.fps, size, sim.cameras, NATIVE.state_names, NATIVE.action_names))
+        cfg = GenConfig(referent=options.referent, n=options.n, image_size=options.image_size, out=str(Path(tmp) / "ds"))
+        validate(cfg)  # the generator's own rules for these options, before any work
+        ref, sim, n, size = load_referent(cfg), sim_settings(cfg), cfg.n, cfg.image_size
+        produce.encode_episode = timed("encode", produce.encode_episode)  # type: ignore[assignment]
+        Cameras.render = timed("render", Cameras.render)  # type: ignore[method-assign]
+        producer = produce.Producer(ref, sim)
+        plan = designs(ref, n, seed=0)
+        oracle = record = write = 0.0
+        first_try = attempts = frames = 0
+        writer = LeRobotWriter(Path(cfg.out), Layout(sim.fps, size, sim.cameras, NATIVE.state_names, NATIVE.action_names))
         for i, design in enumerate(plan):
             t0 = time.perf_counter()
             demo, failures = producer.demonstrate(design, i, 0, max_attempts=10)
@@ -81,4 +87,4 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    sys.exit(main("python bench/generate.py", BenchOptions, bench, doc=__doc__))

@@ -13,6 +13,8 @@ learned policy must ignore:
   no camera, so blanking them cannot hurt it);
 * `position` — picks up whatever stands nearest the referent's canonical slot (the shortcut);
 * `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
+
+eval/registry.py makes them (and every other policy) by name.
 """
 
 from __future__ import annotations
@@ -132,21 +134,3 @@ class Random:
         if self._rng.random() < 0.05:
             self._gripper = -self._gripper
         return np.array([*self._q, self._gripper], np.float32)
-
-
-REFERENCE = {"oracle": Oracle, "position": Position, "nothing": Nothing, "random": Random}
-
-
-def make(name: str) -> Policy:
-    """`oracle`, `position`, `nothing`, `random`, `remote:HOST:PORT` or `ckpt:PATH`."""
-    if name in REFERENCE:
-        return REFERENCE[name]()
-    if name.startswith("remote:"):
-        from eval.remote import RemotePolicy
-
-        return RemotePolicy(name.removeprefix("remote:"))
-    if name.startswith("ckpt:"):
-        from train.policy import CheckpointPolicy
-
-        return CheckpointPolicy(name.removeprefix("ckpt:"))
-    raise PolicyError(f"unknown policy {name!r}; use {', '.join(REFERENCE)}, remote:HOST:PORT or ckpt:PATH")

@@ -17,6 +17,7 @@ from eval.policies import Context, PolicyError
 
 
 class RemotePolicy:
+    argument = "HOST:PORT"  # written remote:HOST:PORT (eval/registry.py)
     needs_images = True
 
     def __init__(self, address: str, replan: int = 5, timeout: float = 5.0) -> None:

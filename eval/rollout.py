@@ -17,6 +17,7 @@ import pandas as pd
 from core.layout import NATIVE
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
+from eval.registry import make
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -114,8 +115,6 @@ class Runner:
 
 def run_chunk(policy_name: str, rows: pd.DataFrame) -> list[dict]:
     """A worker process's share of an exam: its own policy, scenes and renderers."""
-    from eval.policies import make
-
     runner = Runner(make(policy_name))
     logs = [runner.run(row).to_row() for _, row in rows.iterrows()]
     runner.close()

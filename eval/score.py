@@ -1,6 +1,6 @@
-"""Scoring logged rollouts into the battery's report, without running the simulator.
+"""Score logged rollouts into the battery's report, without running the simulator.
 
-    python -m eval.score exam=<exam dir> logs=<rollouts.parquet> [out=<dir>] [policy=<label>]
+python -m eval.score exam=<exam dir> logs=<rollouts.parquet> [out=<dir>] [policy=<label>]
 
 `python -m eval` writes its rollouts in this format and scores them with this module, so a lab
 that logs end-effector and object positions in its own simulator gets the identical report.
@@ -32,6 +32,7 @@ from __future__ import annotations
 import json
 import sys
 from collections import defaultdict
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +44,7 @@ from core.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
 from core.rates import Rate
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
+from gen.cli import UserError, main
 
 REPORT_VERSION = 1
 POLICY_KEY = b"deconfound.policy"
@@ -222,25 +224,27 @@ def read_logs(path: Path) -> tuple[pd.DataFrame, str | None]:
     return table.to_pandas(), policy.decode() if policy else None
 
 
-def main(argv: list[str]) -> int:
+@dataclass
+class ScoreOptions:
+    exam: str  # the exam folder the rollouts were taken on
+    logs: str  # the rollout logs (rollouts.parquet; columns in eval/rollout.py)
+    out: str | None = None  # report folder; default the logs' folder
+    policy: str | None = None  # the policy's label in the report; default the one in the logs, else unknown
+
+
+def run(options: ScoreOptions) -> None:
     from eval.report import write_reports
 
     try:
-        opts = dict(a.split("=", 1) for a in argv)
-        exam = read(opts["exam"])
-        logs, logged_policy = read_logs(Path(opts["logs"]))
-        report = score(exam, logs, opts.get("policy") or logged_policy or "unknown")
-    except (ValueError, KeyError) as exc:
-        message = f"missing option {exc}" if isinstance(exc, KeyError) else str(exc)
-        if isinstance(exc, ValueError) and not isinstance(exc, (ExamError, LogError)):
-            message = "options are exam=<dir> logs=<rollouts.parquet> [out=<dir>] [policy=<label>]"
-        print(f"error: {message}", file=sys.stderr)
-        return 2
-    out = Path(opts.get("out", Path(opts["logs"]).parent))
+        exam = read(options.exam)
+        logs, logged_policy = read_logs(Path(options.logs))
+        report = score(exam, logs, options.policy or logged_policy or "unknown")
+    except (ExamError, LogError) as exc:
+        raise UserError(str(exc)) from None
+    out = Path(options.out or Path(options.logs).parent)
     write_reports(out, report)
     print(f"wrote {out}/report.json, report.md, report.html")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m eval.score", ScoreOptions, run, doc=__doc__))

@@ -7,7 +7,10 @@ answer, and on the held-out fifth picks the alternative whose value scored best 
 credit). Its held-out accuracy, with a Wilson 95% interval, is compared with chance (one over
 the number of alternatives). A variable leaks when the lower end of a one-sided 95% Wilson
 bound, Bonferroni-corrected for the number of variables audited, exceeds chance by more than
-LEAK_MARGIN. Below MIN_EPISODES a plan is too small for any verdict and none is given.
+LEAK_MARGIN. Below MIN_EPISODES a plan is too small for any verdict and none is given. A leak
+is expected when the options asked for it: `confound=position` for variables of the POSITION
+family, a vocabulary restriction (distractor_only, targets) for the IDENTITY family; each
+variable declares its families where the referent makes it (referents/features.py).
 """
 
 from __future__ import annotations
@@ -21,23 +24,25 @@ import pandas as pd
 from core.rates import Rate, wilson
 from core.spec import EpisodeSpec
 from referents import Referent
+from referents.features import IDENTITY, POSITION, Family
 
 FOLDS = 5
 LEAK_MARGIN = 0.05
 MIN_EPISODES = 20
 AUDIT_VERSION = 1
-POSITION_WORDS = ("slot", "bin", "rank", "side", "row")
-IDENTITY_WORDS = ("identity", "kind", "composition", "at slot", "object")
 
 
-def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> pd.DataFrame:
+def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> tuple[pd.DataFrame, dict[str, Family]]:
+    """One row per (episode, alternative, variable); and each variable's families."""
     rows = []
+    families: dict[str, Family] = defaultdict(lambda: Family.NONE)
     for i, spec in enumerate(specs):
         answer = referent.answer(spec)
         for alt in referent.alternatives(spec):
-            for var, value in alt.features.items():
-                rows.append((i, i % FOLDS, alt.id, var, repr(value), alt.id == answer))
-    return pd.DataFrame(rows, columns=["episode", "fold", "alt", "variable", "value", "answer"])
+            for var, feature in alt.features.items():
+                rows.append((i, i % FOLDS, alt.id, var, repr(feature.value), alt.id == answer))
+                families[var] |= feature.family
+    return pd.DataFrame(rows, columns=["episode", "fold", "alt", "variable", "value", "answer"]), families
 
 
 def _held_out_hits(df: pd.DataFrame) -> float:
@@ -59,23 +64,23 @@ def _held_out_hits(df: pd.DataFrame) -> float:
     return hits
 
 
-def expected_leaks(referent: Referent) -> tuple[str, ...]:
-    """Word families of variables that are meant to leak because the user asked for it."""
-    words: tuple[str, ...] = ()
+def expected_leaks(referent: Referent) -> Family:
+    """The families of variables that are meant to leak because the user asked for it."""
+    families = Family.NONE
     if referent.config.confound == "position":
-        words += POSITION_WORDS
+        families |= POSITION
     if referent.config.distractor_only or referent.config.targets:
-        words += IDENTITY_WORDS
-    return words
+        families |= IDENTITY
+    return families
 
 
 def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
     """The audit as JSON-ready data; see module docstring."""
     n = len(specs)
-    df = _table(referent, specs)
+    df, families = _table(referent, specs)
     per_episode = df.drop_duplicates(["episode", "alt"]).groupby("episode").size()
     chance = float((1.0 / per_episode).mean())
-    expected_words = expected_leaks(referent)
+    expected = expected_leaks(referent)
     groups = list(df.groupby("variable", sort=True))
     z = NormalDist().inv_cdf(1 - 0.05 / max(len(groups), 1))
     variables = []
@@ -90,7 +95,7 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
                 "leak_bound": round(bound, 4),
                 "chance": round(chance, 4),
                 "leak": leak,
-                "expected": leak and any(w in var for w in expected_words),
+                "expected": leak and bool(families[var] & expected),
             }
         )
     leaks = [v["variable"] for v in variables if v["leak"]]

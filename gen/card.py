@@ -3,19 +3,11 @@ shows it, and how to regenerate the data."""
 
 from __future__ import annotations
 
-import hashlib
-import json
-from dataclasses import asdict
-from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from core import __version__
-from gen.config import GenConfig
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from gen.provenance import Provenance
 from referents import Referent
-
-if TYPE_CHECKING:
-    from gen.run import Summary
 
 FRONT_MATTER = """---
 license: apache-2.0
@@ -30,33 +22,6 @@ configs:
   data_files: data/*/*.parquet
 ---
 """
-
-
-def spec_hash(referent: Referent) -> str:
-    """Content hash of the resolved referent spec (recorded in the card and generation.json)."""
-    return hashlib.sha256(json.dumps(asdict(referent.config), sort_keys=True, default=str).encode()).hexdigest()[:16]
-
-
-def provenance(referent: Referent, cfg: GenConfig) -> str:
-    return (
-        f"| generator | deconfound {__version__} |\n| referent spec hash | `{spec_hash(referent)}` |\n| seed | {cfg.seed} |\n"
-        f"| simulator | mujoco {metadata.version('mujoco')}, robosuite {metadata.version('robosuite')} |"
-    )
-
-
-def command(cfg: GenConfig) -> str:
-    """The `python -m gen ...` line that regenerates a dataset made with `cfg`."""
-    parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
-    for name in ("codec", "spec", "objects_per_scene", "confound", "split"):
-        value = getattr(cfg, name)
-        if value is not None and value != GenConfig.__dataclass_fields__[name].default:
-            parts.append(f"{name}={value}")
-    for name in ("holdout", "distractor_only", "targets"):
-        if getattr(cfg, name):
-            parts.append(f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'")
-    if cfg.plan_only:
-        parts.append("plan_only=true")
-    return "python -m gen " + " ".join(parts)
 
 
 def audit_tables(report: dict) -> str:
@@ -80,7 +45,21 @@ def audit_tables(report: dict) -> str:
     return "\n".join(lines)
 
 
-def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
+def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int) -> str:
+    keys = ", ".join(f"`{k}`" for k in (*NATIVE.image_keys, STATE_KEY, ACTION_KEY))
+    return (
+        f"{episodes} oracle-verified demonstrations ({frames} frames at {fps} Hz) of a Panda arm in "
+        f"MuJoCo. Format: LeRobot v3.0 ({keys}). Oracle success before retries: "
+        f"{episodes}/{episodes + failed_attempts}."
+    )
+
+
+def plan_contents(episodes: int) -> str:
+    return f"A plan of {episodes} episodes (`plan_only=true`: scene records and audit only, nothing simulated)."
+
+
+def write(root: Path, referent: Referent, provenance: Provenance, report: dict, contents: str) -> None:
+    """The card of a dataset or a plan; `contents` says which and how much."""
     rc = referent.config
     objects = "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
     templates = "\n".join(f"- `{t}`" for t in rc.templates)
@@ -96,14 +75,6 @@ def write(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, repo
             f"\n**Deliberately confounded (`confound={rc.confound}`)**: "
             "made to reproduce instruction blindness, not to train on.\n"
         )
-    contents = (
-        f"A plan of {summary.episodes} episodes (`plan_only=true`: scene records and audit only, nothing simulated)."
-        if summary.plan_only
-        else f"{summary.episodes} oracle-verified demonstrations ({summary.frames} frames at {cfg.fps} Hz) of a Panda arm in "
-        f"MuJoCo. Format: LeRobot v3.0 (`observation.images.agentview`, `observation.images.wrist`, "
-        f"`observation.state`, `action`). Oracle success before retries: "
-        f"{summary.episodes}/{summary.episodes + summary.failed_attempts}."
-    )
     text = (
         FRONT_MATTER.format(referent=referent.name)
         + f"""
@@ -134,13 +105,13 @@ confound audit is in `meta/audit.json`.
 
 | | |
 |---|---|
-{provenance(referent, cfg)}
+{provenance.table()}
 
 ## Regenerate, and take the matching exam
 
 ```
-{command(cfg)}
-{exam_command(cfg)}
+{provenance.command()}
+{provenance.exam_command()}
 python -m eval policy=<your policy> exam=datasets/{referent.name}-exam
 ```
 """
@@ -148,14 +119,7 @@ python -m eval policy=<your policy> exam=datasets/{referent.name}-exam
     (root / "README.md").write_text(text)
 
 
-def exam_command(cfg: GenConfig) -> str:
-    """The held-out exam for a dataset: same referent and options, exam split, another seed."""
-    dropped = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only")
-    kept = [p for p in command(cfg).split(" ") if p.split("=")[0].lstrip("'") not in dropped]
-    return " ".join([*kept, "n=200", f"seed={cfg.seed + 1}", "split=exam"])
-
-
-def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary, report: dict) -> None:
+def write_exam(root: Path, referent: Referent, provenance: Provenance, report: dict, trials: int) -> None:
     """The exam's card: what it tests, its faces, how to take it, and its plan's audit."""
     from core.exam import FACES
 
@@ -165,7 +129,7 @@ def write_exam(root: Path, referent: Referent, cfg: GenConfig, summary: Summary,
         + f"""
 # Counterfactual exam: `{referent.name}`
 
-{summary.episodes} oracle-solvable trials on the held-out `exam` random stream (scene hashes never
+{trials} oracle-solvable trials on the held-out `exam` random stream (scene hashes never
 occur in a training split). Each trial holds the pixels, scene and robot pose fixed and changes
 one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit)
 and `trials.parquet` (one row per rollout); the format is documented in `exam.json` and in the
@@ -187,12 +151,12 @@ logs with `python -m eval.score exam=<this folder> logs=<rollouts.parquet>`.
 
 | | |
 |---|---|
-{provenance(referent, cfg)}
+{provenance.table()}
 
 ## Regenerate
 
 ```
-{command(cfg)}
+{provenance.command()}
 ```
 """
     )

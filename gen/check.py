@@ -11,13 +11,16 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import av
 import numpy as np
 
-from core import parquet
+from core.layout import ACTION_KEY, STATE_KEY
 from gen import scenes
+from gen.cli import Failed, UserError, main
+from gen.lerobot_reader import INFO_PATH, LeRobotReader, frame_count
 from gen.stats import vector_stats
 
 
@@ -30,28 +33,24 @@ def _require(condition: bool, problem: str) -> None:
         raise Broken(problem)
 
 
-def _video_frames(path: Path) -> int:
-    with av.open(str(path)) as container:
-        return sum(1 for p in container.demux(container.streams.video[0]) if p.size)
-
-
 def check(root: Path) -> dict:
     """Raises Broken with the first problem; returns info.json when all is well."""
-    _require((root / "meta/info.json").is_file(), f"{root}: no meta/info.json")
+    _require((root / INFO_PATH).is_file(), f"{root}: no {INFO_PATH}")
     generation = root / "meta/generation.json"
     _require(generation.is_file(), f"{root}: no meta/generation.json: not a complete generated dataset")
     _require(
         json.loads(generation.read_text()).get("complete") is True, f"{root}: meta/generation.json does not mark it complete"
     )
-    info = json.loads((root / "meta/info.json").read_text())
+    dataset = LeRobotReader(root)
+    info = dataset.info
     _require(info.get("codebase_version") == "v3.0", f"codebase_version is {info.get('codebase_version')!r}, not v3.0")
-    episodes = parquet.read(root / "meta/episodes").sort_values("episode_index").reset_index(drop=True)
+    episodes = dataset.episodes
     records = scenes.read(root)
     n = info["total_episodes"]
     _require(len(episodes) == n, f"info.json says {n} episodes, meta/episodes has {len(episodes)}")
     _require(list(episodes["episode_index"]) == list(range(n)), "meta/episodes: episode_index is not 0..n-1")
     _require(len(records) == n, f"info.json says {n} episodes, meta/scenes.parquet has {len(records)}")
-    data = parquet.read(root / "data").sort_values("index").reset_index(drop=True)
+    data = dataset.data
     total = info["total_frames"]
     _require(len(data) == total, f"info.json says {total} frames, data has {len(data)}")
     _require(np.array_equal(data["index"].to_numpy(), np.arange(total)), "data: index is not continuous 0..total_frames-1")
@@ -70,31 +69,24 @@ def check(root: Path) -> dict:
             np.allclose(rows["timestamp"].to_numpy(), np.arange(ep.length) / fps, atol=1e-4),
             f"episode {ep.episode_index}: timestamps are not frame_index / fps",
         )
-    for key, feature in info["features"].items():
-        if feature["dtype"] != "video":
-            continue
-        files: dict[tuple[int, int], float] = {}
-        for ep in episodes.to_dict("records"):
-            span = (ep[f"videos/{key}/to_timestamp"] - ep[f"videos/{key}/from_timestamp"]) * fps
-            _require(
-                abs(span - ep["length"]) < 1e-3,
-                f"{key}: episode {ep['episode_index']} spans {span:.1f} frames, not {ep['length']}",
-            )
-            where = (int(ep[f"videos/{key}/chunk_index"]), int(ep[f"videos/{key}/file_index"]))
-            files[where] = max(files.get(where, 0.0), ep[f"videos/{key}/to_timestamp"])
-        for (chunk, file), end_s in files.items():
-            path = root / info["video_path"].format(video_key=key, chunk_index=chunk, file_index=file)
+    for key, camera in zip(dataset.video_keys, dataset.cameras):
+        files: dict[Path, float] = {}
+        for s in dataset.spans(camera):
+            span = (s.to_timestamp - s.from_timestamp) * fps
+            _require(abs(span - s.length) < 1e-3, f"{key}: episode {s.episode} spans {span:.1f} frames, not {s.length}")
+            files[s.path] = max(files.get(s.path, 0.0), s.to_timestamp)
+        for path, end_s in files.items():
             _require(path.is_file(), f"{key}: missing video {path.relative_to(root)}")
             try:
-                count = _video_frames(path)
+                count = frame_count(path)
             except (av.error.FFmpegError, OSError) as exc:
                 raise Broken(f"{key}: {path.relative_to(root)} cannot be read ({exc})") from None
             _require(
                 count >= round(end_s * fps),
                 f"{key}: {path.relative_to(root)} has {count} frames, episodes need {round(end_s * fps)}",
             )
-    stats = json.loads((root / "meta/stats.json").read_text())
-    for key in ("observation.state", "action"):
+    stats = dataset.stats
+    for key in (STATE_KEY, ACTION_KEY):
         values = np.stack(data[key].to_numpy())
         fresh = vector_stats(values)
         for name in ("mean", "std", "min", "max"):
@@ -102,10 +94,9 @@ def check(root: Path) -> dict:
                 np.allclose(stats[key][name], fresh[name], rtol=1e-5, atol=1e-6),
                 f"stats.json: {key} {name} does not match the data",
             )
-    for key, feature in info["features"].items():
-        if feature["dtype"] == "video":
-            _require(min(np.ravel(stats[key]["std"])) > 0, f"stats.json: {key} std is 0")
-    tasks = parquet.read(root / "meta/tasks.parquet")
+    for key in dataset.video_keys:
+        _require(min(np.ravel(stats[key]["std"])) > 0, f"stats.json: {key} std is 0")
+    tasks = dataset.tasks
     by_index = {int(i): t for t, i in zip(tasks.index, tasks["task_index"])}
     first = data.groupby("episode_index")["task_index"].first()
     for rec in records.itertuples():
@@ -116,22 +107,23 @@ def check(root: Path) -> dict:
     return info
 
 
-def main(argv: list[str]) -> int:
-    if len(argv) != 1 or argv[0] in ("-h", "--help"):
-        print("usage: python -m gen.check <dataset>")
-        return 0 if argv else 2
-    root = Path(argv[0])
+@dataclass
+class CheckOptions:
+    dataset: str = ""  # the dataset folder to check
+
+
+def run(options: CheckOptions) -> None:
+    root = Path(options.dataset)
+    if not root.is_dir():
+        raise UserError(f"{root} is not a folder")
     try:
         info = check(root)
     except Broken as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+        raise Failed(str(exc)) from None
     except (OSError, KeyError, ValueError) as exc:
-        print(f"error: {root}: unreadable ({type(exc).__name__}: {exc})", file=sys.stderr)
-        return 1
+        raise Failed(f"{root}: unreadable ({type(exc).__name__}: {exc})") from None
     print(f"ok: {root}: {info['total_episodes']} episodes, {info['total_frames']} frames, all checks passed")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m gen.check", CheckOptions, run, doc=__doc__, positional="dataset"))

@@ -57,6 +57,8 @@ def _one_line(exc: BaseException, schema: type) -> str:
     text = str(exc).strip()
     if isinstance(exc, OverrideParseException):
         return f"cannot parse the option {exc.override!r}: write options as key=value"
+    if text.startswith("Ambiguous value for argument"):  # Hydra reads `key=a,b` as a sweep
+        return f"{text}: write a list as 'key=[a,b]'"
     if isinstance(exc, MissingMandatoryValue):
         return f"missing option {exc.full_key}=..."
     if "Could not override" in text or "not in struct" in text or f"not in '{schema.__name__}'" in text:
@@ -105,7 +107,8 @@ def usage(command: str, schema: type, doc: str = "", positional: str | None = No
     rows = [(k, h) for k, h in _options(schema) if not (positional and k.split("=")[0] == positional)]
     width = max((len(k) for k, _ in rows), default=0)
     lines = [f"  {k:<{width}}  {h}".rstrip() for k, h in rows]
-    return "\n\n".join(part for part in (head, summary, "options (default):\n" + "\n".join(lines)) if part)
+    options = "options (default):\n" + "\n".join(lines) if lines else ""
+    return "\n\n".join(part for part in (head, summary, options) if part)
 
 
 def parse(command: str, schema: type[T], argv: list[str], positional: str | None = None) -> T:

@@ -43,6 +43,16 @@ class GenConfig:
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
 
+    def spec_overrides(self) -> dict:
+        """The options that edit the referent spec."""
+        return {
+            "objects_per_scene": self.objects_per_scene,
+            "holdout": self.holdout,
+            "distractor_only": self.distractor_only,
+            "targets": self.targets,
+            "confound": self.confound,
+        }
+
 
 def parse(argv: list[str]) -> GenConfig:
     """Overrides -> validated config."""

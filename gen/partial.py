@@ -18,8 +18,10 @@ import json
 import os
 import pickle
 import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING
 
 from gen import faults
 
@@ -112,3 +114,16 @@ def publish(built: Path, out: Path) -> None:
     built.rename(out)
     if old is not None:
         shutil.rmtree(old)
+
+
+@contextmanager
+def staging(out: Path) -> Iterator[Path]:
+    """A throwaway folder beside `out` for products cheap to redo (exams, plans): published to
+    `out` when the block succeeds, removed either way."""
+    root = out.parent / f".{out.name}.staging-{os.getpid()}"
+    shutil.rmtree(root, ignore_errors=True)
+    try:
+        yield root
+        publish(root, out)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)

@@ -1,20 +1,29 @@
-"""Planning: a referent and a seed -> balanced, realised episode specs.
+"""Planning: a referent and a seed -> balanced, realised episode specs, and their audit.
 
 Pure data: no simulator runs here, so a 10,000-episode plan takes seconds. Designs (the roles:
 which objects, where, which is the target) are drawn in sequence by one balancer; poses are
 realised per episode from (seed, index, attempt), so re-realising a failed demo changes its
-poses but never its roles.
+poses but never its roles. `plan_and_audit` is the step every product (dataset, plan, exam)
+starts from: a plan whose confound audit finds a leak nobody asked for goes no further.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+import referents
 from core import catalog
 from core.spec import EpisodeSpec, SceneObject, SimSettings
 from core.world import TABLE_TOP_Z
-from referents import Referent
-from referents.base import Balance, Design, ReferentSpecError
+from gen.audit import audit
+from gen.cli import UserError
+from gen.config import GenConfig
+from referents import Referent, UnknownReferent
+from referents.balance import Balance
+from referents.design import Design
+from referents.schema import ReferentSpecError
 
 # Extra entropy of each split's random streams: an exam never re-draws a training scene.
 SPLITS = {"train": (), "exam": (0xE7A3,)}
@@ -65,3 +74,50 @@ def realize(
 
 def plan(referent: Referent, n: int, seed: int, sim: SimSettings, split: str = "train") -> list[EpisodeSpec]:
     return [realize(referent, d, i, seed, sim, split=split) for i, d in enumerate(designs(referent, n, seed, split))]
+
+
+@dataclass
+class Planned:
+    """A product's plan: its referent, roles, realised specs and the audit of them."""
+
+    referent: Referent
+    sim: SimSettings
+    designs: list[Design]
+    specs: list[EpisodeSpec]
+    audit: dict
+
+
+def load_referent(cfg: GenConfig) -> Referent:
+    try:
+        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides())
+    except (UnknownReferent, ReferentSpecError) as exc:
+        raise UserError(str(exc)) from None
+
+
+def sim_settings(cfg: GenConfig) -> SimSettings:
+    return SimSettings(image_size=cfg.image_size, fps=cfg.fps)
+
+
+def check_audit(report: dict) -> None:
+    """A plan whose audit finds a leak nobody asked for is refused, naming the variable."""
+    if report["unexpected_leaks"]:
+        worst = {v["variable"]: v for v in report["variables"]}
+        detail = ", ".join(
+            f"{name} (held-out accuracy {worst[name]['rate']:.0%} vs chance {report['chance']:.0%})"
+            for name in report["unexpected_leaks"]
+        )
+        raise UserError(f"the {report['referent']} plan fails its confound audit: {detail} predicts the target")
+
+
+def plan_and_audit(cfg: GenConfig) -> Planned:
+    """The options -> the audited plan every product is built from (bad input: `UserError`)."""
+    referent = load_referent(cfg)
+    sim = sim_settings(cfg)
+    try:
+        roles = designs(referent, cfg.n, cfg.seed, cfg.split)
+    except ReferentSpecError as exc:
+        raise UserError(str(exc)) from None
+    specs = [realize(referent, d, i, cfg.seed, sim, split=cfg.split) for i, d in enumerate(roles)]
+    report = audit(referent, specs)
+    check_audit(report)
+    return Planned(referent, sim, roles, specs, report)

@@ -10,48 +10,20 @@ from __future__ import annotations
 
 import sys
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
-import av
 import cv2
 import numpy as np
 
-from core import parquet
-from core.layout import AGENTVIEW
+from core.layout import AGENTVIEW, NATIVE
 from core.spec import EpisodeSpec
 from gen import scenes
+from gen.cli import UserError, main
+from gen.lerobot_reader import INFO_PATH, LeRobotReader
 
 TILE = 256
 CAPTION = 54
-
-
-def video_frames(root: Path, camera: str, episodes: list[int]) -> dict[int, np.ndarray]:
-    """First frame of each episode, decoded from the dataset's mp4 files."""
-    meta = parquet.read(root / "meta/episodes").set_index("episode_index")
-    key = f"videos/observation.images.{camera}"
-    wanted: dict[Path, dict[int, int]] = {}
-    fps = None
-    for ep in episodes:
-        row = meta.loc[ep]
-        path = (
-            root
-            / f"videos/observation.images.{camera}"
-            / f"chunk-{int(row[key + '/chunk_index']):03d}/file-{int(row[key + '/file_index']):03d}.mp4"
-        )
-        wanted.setdefault(path, {})[ep] = row[key + "/from_timestamp"]
-    out: dict[int, np.ndarray] = {}
-    for path, starts in wanted.items():
-        with av.open(str(path)) as container:
-            stream = container.streams.video[0]
-            fps = float(stream.average_rate)
-            by_index = {int(round(t * fps)): ep for ep, t in starts.items()}
-            last = max(by_index)
-            for i, frame in enumerate(container.decode(stream)):
-                if i in by_index:
-                    out[by_index[i]] = frame.to_ndarray(format="rgb24")
-                if i >= last:
-                    break
-    return out
 
 
 def rendered_frames(specs: list[EpisodeSpec], camera: str) -> dict[int, np.ndarray]:
@@ -81,8 +53,9 @@ def contact_sheet(root: Path, out: Path, n: int = 16, camera: str = AGENTVIEW, c
     records = scenes.read(root).head(n)
     specs = [EpisodeSpec.from_json(s) for s in records["spec"]]
     episodes = list(records["episode_index"])
-    has_video = (root / f"videos/observation.images.{camera}").is_dir()
-    frames = video_frames(root, camera, episodes) if has_video else rendered_frames(specs, camera)
+    dataset = LeRobotReader(root)
+    has_video = (root / INFO_PATH).is_file() and camera in dataset.cameras
+    frames = dataset.first_frames(camera, episodes) if has_video else rendered_frames(specs, camera)
     tiles = [tile(frames[ep], f"{ep}: {spec.instruction}") for ep, spec in zip(episodes, specs)]
     while len(tiles) % columns:
         tiles.append(np.full_like(tiles[0], 255))
@@ -93,24 +66,25 @@ def contact_sheet(root: Path, out: Path, n: int = 16, camera: str = AGENTVIEW, c
     return out
 
 
-def main(argv: list[str]) -> int:
-    if not argv or argv[0] in ("-h", "--help"):
-        print(__doc__.strip().splitlines()[2].strip())
-        return 0 if argv else 2
-    root = Path(argv[0])
-    try:
-        opts = dict(a.split("=", 1) for a in argv[1:])
-    except ValueError:
-        print("error: options are key=value (out=, n=, camera=)", file=sys.stderr)
-        return 2
+@dataclass
+class PreviewOptions:
+    dataset: str = ""  # the dataset (or plan) folder
+    out: str | None = None  # the PNG to write; default <dataset>/preview.png
+    n: int = 16  # how many episodes, from the first
+    camera: str = AGENTVIEW  # which camera's first frame
+
+
+def run(options: PreviewOptions) -> None:
+    root = Path(options.dataset)
     if not (root / scenes.SCENES_PATH).is_file():
-        print(f"error: {root} has no {scenes.SCENES_PATH}: not a dataset made by python -m gen", file=sys.stderr)
-        return 2
-    out = Path(opts.get("out", root / "preview.png"))
-    path = contact_sheet(root, out, int(opts.get("n", 16)), opts.get("camera", AGENTVIEW))
-    print(f"wrote {path}")
-    return 0
+        raise UserError(f"{root} has no {scenes.SCENES_PATH}: not a dataset made by python -m gen")
+    if options.n < 1:
+        raise UserError(f"n must be at least 1, got {options.n}")
+    if options.camera not in NATIVE.camera_names:
+        raise UserError(f"camera must be one of {', '.join(NATIVE.camera_names)}, got {options.camera!r}")
+    out = Path(options.out) if options.out else root / "preview.png"
+    print(f"wrote {contact_sheet(root, out, options.n, options.camera)}")
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m gen.preview", PreviewOptions, run, doc=__doc__, positional="dataset"))

@@ -24,7 +24,7 @@ from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 from referents import Referent
-from referents.base import Design
+from referents.design import Design
 
 
 @dataclass

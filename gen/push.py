@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gen.cli import Failed, UserError, main
+
 if TYPE_CHECKING:
     from huggingface_hub import HfApi
 
@@ -24,6 +26,11 @@ IGNORE = [".*", "**/.*", "*.tmp", "**/*.tmp", "*.partial/**"]
 
 class PushError(RuntimeError):
     pass
+
+
+def check_repo_id(repo_id: str) -> None:
+    if repo_id.count("/") != 1:
+        raise PushError(f"repo_id must be <user or org>/<name>, got {repo_id!r}")
 
 
 @dataclass
@@ -86,8 +93,7 @@ def push(root: Path, repo_id: str, private: bool = False, branch: str | None = N
     from huggingface_hub import HfApi
     from huggingface_hub.errors import HfHubHTTPError
 
-    if "/" not in repo_id or repo_id.count("/") != 1:
-        raise PushError(f"repo_id must be <user or org>/<name>, got {repo_id!r}")
+    check_repo_id(repo_id)
     tag = _validate(root)
     files = _files(root)
     api = HfApi(endpoint=os.environ.get("HF_ENDPOINT"))
@@ -119,31 +125,28 @@ def push(root: Path, repo_id: str, private: bool = False, branch: str | None = N
     return Pushed(repo_id, files, commit.oid, tag, str(repo))
 
 
-def main(argv: list[str]) -> int:
-    if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m gen.push <dataset or exam dir> repo_id=<user/name> [private=true] [branch=<name>]")
-        return 0 if argv else 2
-    root = Path(argv[0])
+@dataclass
+class PushOptions:
+    repo_id: str  # <user or org>/<name> of the hub dataset repo
+    root: str = ""  # the dataset or exam folder to push
+    private: bool = False  # create the repo private
+    branch: str | None = None  # commit to this branch (created if needed) instead of main
+
+
+def run(options: PushOptions) -> None:
+    root = Path(options.root)
+    if not root.is_dir():
+        raise UserError(f"{root} is not a folder")
     try:
-        opts = dict(a.split("=", 1) for a in argv[1:])
-    except ValueError:
-        print("error: options are key=value (repo_id=, private=, branch=)", file=sys.stderr)
-        return 2
-    unknown = set(opts) - {"repo_id", "private", "branch"}
-    if unknown or "repo_id" not in opts:
-        print(f"error: {'unknown option ' + repr(sorted(unknown)[0]) if unknown else 'repo_id= is required'}", file=sys.stderr)
-        return 2
-    if opts.get("private", "false").lower() not in ("true", "false"):
-        print(f"error: private must be true or false, got {opts['private']!r}", file=sys.stderr)
-        return 2
-    try:
-        pushed = push(root, opts["repo_id"], opts.get("private", "false").lower() == "true", opts.get("branch"))
+        check_repo_id(options.repo_id)
     except PushError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+        raise UserError(str(exc)) from None
+    try:
+        pushed = push(root, options.repo_id, options.private, options.branch)
+    except PushError as exc:
+        raise Failed(str(exc)) from None
     print(f"pushed {len(pushed.files)} files to {pushed.url} (commit {pushed.commit[:12]}, tag {pushed.tag})")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m gen.push", PushOptions, run, doc=__doc__, positional="root"))

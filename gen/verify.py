@@ -9,16 +9,18 @@ absolute difference below 3 of 255 per frame). Exit code 1 names the first misma
 
 from __future__ import annotations
 
-import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import av
 import numpy as np
 
-from core import parquet
+from core.layout import ACTION_KEY, STATE_KEY
 from core.spec import EpisodeSpec
 from gen import scenes
+from gen.cli import Failed, UserError, main
+from gen.lerobot_reader import LeRobotReader
 
 FRAME_TOLERANCE = 3.0  # mean |difference| per frame, in 0..255 units
 
@@ -27,32 +29,15 @@ class Mismatch(Exception):
     pass
 
 
-def _decoded(root: Path, info: dict, episode: dict, camera: str) -> np.ndarray:
-    key = f"observation.images.{camera}"
-    path = root / info["video_path"].format(
-        video_key=key, chunk_index=int(episode[f"videos/{key}/chunk_index"]), file_index=int(episode[f"videos/{key}/file_index"])
-    )
-    first = int(round(episode[f"videos/{key}/from_timestamp"] * info["fps"]))
-    frames = []
-    with av.open(str(path)) as container:
-        for k, frame in enumerate(container.decode(container.streams.video[0])):
-            if k >= first + episode["length"]:
-                break
-            if k >= first:
-                frames.append(frame.to_ndarray(format="rgb24"))
-    return np.stack(frames)
-
-
 def verify(root: Path, sample: int = 3) -> list[int]:
     """Raises Mismatch on the first difference; returns the episodes checked."""
     import referents
     from gen.produce import Producer
     from oracle.episode import demonstrate
 
-    info = json.loads((root / "meta/info.json").read_text())
+    dataset = LeRobotReader(root)
     records = scenes.read(root).sort_values("episode_index").reset_index(drop=True)
-    data = parquet.read(root / "data")
-    episodes = parquet.read(root / "meta/episodes").set_index("episode_index")
+    data = dataset.data
     chosen = sorted({int(i) for i in np.linspace(0, len(records) - 1, min(sample, len(records)))})
     producers: dict[tuple, Producer] = {}
     for ep in chosen:
@@ -66,12 +51,12 @@ def verify(root: Path, sample: int = 3) -> list[int]:
         rows = data[data.episode_index == ep].sort_values("frame_index")
         if not demo.success:
             raise Mismatch(f"episode {ep}: its spec no longer yields a successful demo")
-        recorded = np.stack(rows["action"].to_numpy())
+        recorded = np.stack(rows[ACTION_KEY].to_numpy())
         if recorded.shape != demo.actions.shape or not np.array_equal(recorded, demo.actions):
             raise Mismatch(f"episode {ep}: actions differ from a regeneration")
         produced = producer.record(demo, [])
-        if not np.array_equal(np.stack(rows["observation.state"].to_numpy()), produced.episode.states):
-            raise Mismatch(f"episode {ep}: observation.state differs from a regeneration")
+        if not np.array_equal(np.stack(rows[STATE_KEY].to_numpy()), produced.episode.states):
+            raise Mismatch(f"episode {ep}: {STATE_KEY} differs from a regeneration")
         fresh = scenes.row(ep, spec, produced)
         for column in ("scene", "counterfactuals", "spec", "initial_state", "outcome"):
             if column == "initial_state":
@@ -82,7 +67,7 @@ def verify(root: Path, sample: int = 3) -> list[int]:
                 raise Mismatch(f"episode {ep}: scene record column {column!r} differs from a regeneration")
         for camera, mp4 in produced.episode.videos.items():
             rendered = _frames_of(mp4)
-            decoded = _decoded(root, info, {**episodes.loc[ep].to_dict(), "length": len(rows)}, camera)
+            decoded = dataset.episode_frames(ep, camera)
             if rendered.shape != decoded.shape:
                 raise Mismatch(f"episode {ep}: {camera} video has {len(decoded)} frames, regeneration has {len(rendered)}")
             worst = float(np.abs(rendered.astype(int) - decoded.astype(int)).mean(axis=(1, 2, 3)).max())
@@ -100,23 +85,26 @@ def _frames_of(mp4: bytes) -> np.ndarray:
         return np.stack([f.to_ndarray(format="rgb24") for f in container.decode(container.streams.video[0])])
 
 
-def main(argv: list[str]) -> int:
-    if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m gen.verify <dataset> [episodes=3]")
-        return 0 if argv else 2
-    root = Path(argv[0])
+@dataclass
+class VerifyOptions:
+    dataset: str = ""  # the dataset folder to verify
+    episodes: int = 3  # how many episodes, spread over the dataset, to regenerate
+
+
+def run(options: VerifyOptions) -> None:
+    root = Path(options.dataset)
+    if not root.is_dir():
+        raise UserError(f"{root} is not a folder")
+    if options.episodes < 1:
+        raise UserError(f"episodes must be at least 1, got {options.episodes}")
     try:
-        opts = dict(a.split("=", 1) for a in argv[1:])
-        checked = verify(root, int(opts.get("episodes", 3)))
+        checked = verify(root, options.episodes)
     except Mismatch as exc:
-        print(f"error: {root}: {exc}", file=sys.stderr)
-        return 1
+        raise Failed(f"{root}: {exc}") from None
     except (OSError, KeyError, ValueError) as exc:
-        print(f"error: {root}: cannot verify ({type(exc).__name__}: {exc})", file=sys.stderr)
-        return 2
+        raise UserError(f"{root}: cannot verify ({type(exc).__name__}: {exc})") from None
     print(f"ok: {root}: episodes {checked} regenerate identically (video within {FRAME_TOLERANCE:g}/255)")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m gen.verify", VerifyOptions, run, doc=__doc__, positional="dataset"))

@@ -19,7 +19,7 @@ from typing import Any
 from core.spec import SimSettings
 from gen import faults
 from gen.produce import Produced, Producer
-from referents.base import Design
+from referents.design import Design
 
 MAX_POOL_RESTARTS = 2
 

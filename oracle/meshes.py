@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from core import cache_dir
+
 MAX_FACES = 2000
 ROBOT_PREFIXES = ("robot0_", "gripper0_", "fixed_mount0_")
 
@@ -49,7 +51,7 @@ def lighten(root: ET.Element) -> None:
 def decimated(file: str) -> tuple[np.ndarray, np.ndarray] | None:
     """(vertices, faces) of the mesh file cut to `MAX_FACES` triangles, or None if it is smaller."""
     data = Path(file).read_bytes()
-    cache = _cache_dir() / f"{hashlib.sha256(data).hexdigest()[:24]}-{MAX_FACES}.npz"
+    cache = cache_dir() / "meshes" / f"{hashlib.sha256(data).hexdigest()[:24]}-{MAX_FACES}.npz"
     try:
         with np.load(cache) as npz:
             return (npz["vertices"], npz["faces"]) if len(npz["faces"]) else None
@@ -65,10 +67,6 @@ def decimated(file: str) -> tuple[np.ndarray, np.ndarray] | None:
     except OSError:
         pass
     return light
-
-
-def _cache_dir() -> Path:
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "deconfound" / "meshes"
 
 
 def _decimate(path: Path) -> tuple[np.ndarray, np.ndarray] | None:

@@ -1,7 +1,7 @@
 """Referent types: the ways an instruction can name its target.
 
-Each type is one declarative spec (`<type>.yaml`, validated by `referents.base`) and one small
-module (`<type>.py`) holding:
+Each type is one declarative spec (`<type>.yaml`, schema in `referents.schema`) and one small
+module (`<type>.py`) that keeps to the contract in `referents.contract`:
 
 * `design(config, balance) -> Design` — the balanced discrete choices of one episode (required);
 * `demo(skills, spec)` — the oracle's plan (default: grasp the target and lift it);
@@ -10,22 +10,29 @@ module (`<type>.py`) holding:
 * `answer(spec) -> str` — which alternative is right (default: the target object);
 * `assets(config)` — the model inventory (default: one body per candidate of a kind, at most
   `objects_per_scene`);
+* `validate(config)` — type-specific checks of the spec (default: none);
 * `CONFOUNDS` — the shortcuts `confound=` may re-introduce (default: none).
 
-Adding a type means adding those two files; nothing else changes.
+The built-in types live here; a spec file given by path may bring its type's module beside it
+(`<dir>/<type>.py`). Adding a type means adding those two files; nothing else changes.
 """
 
 from __future__ import annotations
 
-import importlib
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 from core.demo import Plan, Skills
 from core.spec import EpisodeSpec
-from referents.base import Alternative, Balance, Design, ReferentConfig, ReferentSpecError, object_alternatives
+from referents.balance import Balance
+from referents.contract import TypeModule, code_of, pick_and_lift
+from referents.design import Design
+from referents.features import Alternative
+from referents.schema import ReferentConfig, ReferentSpecError
+
+__all__ = ["HERE", "Referent", "UnknownReferent", "available", "demo_of", "load", "pick_and_lift"]
 
 HERE = Path(__file__).parent
 
@@ -35,50 +42,68 @@ class UnknownReferent(ValueError):
 
 
 def available() -> list[str]:
+    """The built-in types."""
     return sorted(p.stem for p in HERE.glob("*.yaml"))
 
 
 @dataclass(frozen=True)
 class Referent:
+    """A loaded referent type: its validated spec, its checked code, the bodies its scenes compile."""
+
     config: ReferentConfig
-    module: ModuleType
+    code: TypeModule
+    inventory: tuple[tuple[str, int], ...]
 
     @property
     def name(self) -> str:
         return self.config.type
 
     def design(self, balance: Balance) -> Design:
-        return self.module.design(self.config, balance)
+        design = self.code.design(self.config, balance)
+        bodies = dict(self.inventory)
+        for kind, n in Counter(p.candidate.kind for p in design.placements).items():
+            if n > bodies.get(kind, 0):
+                problem = f"a scene holds {n} {kind!r} objects but assets() of type {self.name} compiles {bodies.get(kind, 0)}"
+                raise self.config.fail("assets", problem)
+        return design
 
     def demo(self, skills: Skills, spec: EpisodeSpec) -> None:
-        demo_of(self.name)(skills, spec)
+        self.code.demo(skills, spec)
 
     def alternatives(self, spec: EpisodeSpec) -> list[Alternative]:
-        if hasattr(self.module, "alternatives"):
-            return self.module.alternatives(self.config, spec)
-        return object_alternatives(self.config, spec)
+        return self.code.alternatives(self.config, spec)
 
     def assets(self) -> tuple[tuple[str, int], ...]:
-        if hasattr(self.module, "assets"):
-            return tuple(sorted(self.module.assets(self.config)))
-        return self.config.assets()
+        return self.inventory
 
     def answer(self, spec: EpisodeSpec) -> str:
-        return self.module.answer(spec) if hasattr(self.module, "answer") else spec.target
+        return self.code.answer(spec)
 
 
-def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.grasp(spec.target)
-    skills.lift()
+def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | None:
+    """Where a type's code lives: beside the spec file it came from, else among the built-in types."""
+    if spec_path is not None:
+        beside = Path(spec_path).resolve().parent / f"{referent_type}.py"
+        if beside.parent != HERE.resolve() and beside.is_file():
+            return beside
+    return HERE / f"{referent_type}.py" if referent_type in available() else None
 
 
-def demo_of(referent_type: str) -> Plan:
-    """The oracle's plan for a type's episodes (all a replay needs: no spec file)."""
-    return getattr(importlib.import_module(f"referents.{referent_type}"), "demo", pick_and_lift)
+def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:
+    """The oracle's plan for a type's episodes, by the type's name (all a replay needs: no spec
+    file). A type brought beside its spec file is found only given that file's path."""
+    module = _module_path(referent_type, spec_path)
+    if module is None:
+        raise UnknownReferent(
+            f"unknown referent type {referent_type!r}; built-in: {', '.join(available())} "
+            "(a type brought beside its spec file needs that file's path)"
+        )
+    return code_of(module).demo
 
 
 def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | None = None) -> Referent:
-    """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path`.
+    """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path` (whose type's
+    module may stand beside it).
 
     `overrides` replace top-level spec fields (e.g. objects_per_scene, holdout, confound).
     """
@@ -91,11 +116,17 @@ def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | No
         if not path.is_file():
             raise ReferentSpecError(f"{path}: referent spec file not found")
     config = ReferentConfig.from_yaml(path, overrides)
-    if not (HERE / f"{config.type}.py").is_file():
-        raise ReferentSpecError(f"{path}: type: no module referents/{config.type}.py for type {config.type!r}")
-    module = importlib.import_module(f"referents.{config.type}")
-    if config.confound and config.confound not in getattr(module, "CONFOUNDS", ()):
-        raise ReferentSpecError(f"{path}: confound: {config.confound!r} is not defined for referent type {config.type!r}")
-    if hasattr(module, "validate"):
-        module.validate(config)
-    return Referent(config, module)
+    module = _module_path(config.type, path)
+    if module is None:
+        raise config.fail(
+            "type",
+            f"no module for referent type {config.type!r}: none beside the spec ({path.resolve().parent / f'{config.type}.py'}) "
+            f"and no built-in type of that name ({', '.join(available())})",
+        )
+    if module.parent != HERE and config.type in available():
+        raise config.fail("type", f"{config.type!r} is a built-in type; the module beside the spec ({module}) needs another name")
+    code = code_of(module)
+    if config.confound and config.confound not in code.CONFOUNDS:
+        raise config.fail("confound", f"{config.confound!r} is not defined for referent type {config.type!r}")
+    code.validate(config)
+    return Referent(config, code, code.inventory(config))

@@ -1,13 +1,15 @@
 """Category referent: one object per category in each scene; the category word names the
-target (see referents.base.naming_design). The audit also checks that the set of categories
+target (see referents.compose.naming_design). The audit also checks that the set of categories
 in a scene does not predict which one is asked for."""
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-
 from core.spec import EpisodeSpec, SceneObject
-from referents.base import Alternative, Balance, Design, ReferentConfig, naming_design, object_alternatives
+from referents.balance import Balance
+from referents.compose import naming_design
+from referents.design import Design
+from referents.features import IDENTITY, Alternative, Feature, object_alternatives
+from referents.schema import ReferentConfig
 
 CONFOUNDS = ("position",)
 
@@ -19,7 +21,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     present = tuple(sorted(o.attributes["category"] for o in spec.objects))
 
-    def extra(o: SceneObject) -> dict[str, Hashable]:
-        return {"co-appearing categories": (present, o.attributes["category"])}
+    def extra(o: SceneObject) -> dict[str, Feature]:
+        return {"co-appearing categories": Feature((present, o.attributes["category"]), IDENTITY)}
 
     return object_alternatives(cfg, spec, extra=extra)

@@ -1,9 +1,12 @@
 """Color referent: every scene holds one shape (balanced) in several colors; the color word
-names the target (see referents.base.naming_design)."""
+names the target (see referents.compose.naming_design)."""
 
 from __future__ import annotations
 
-from referents.base import Balance, Design, ReferentConfig, naming_design
+from referents.balance import Balance
+from referents.compose import naming_design
+from referents.design import Design
+from referents.schema import ReferentConfig
 
 CONFOUNDS = ("position",)
 

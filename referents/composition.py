@@ -4,7 +4,10 @@ scene. Counterfactuals change one attribute: the size word, or the color word.""
 from __future__ import annotations
 
 from core.spec import Counterfactual
-from referents.base import Balance, Design, ReferentConfig, crossed_scene, fill
+from referents.balance import Balance
+from referents.compose import crossed_scene, fill
+from referents.design import Design
+from referents.schema import ReferentConfig
 
 CONFOUNDS = ("position",)
 

@@ -7,11 +7,13 @@ swap counterfactual names the other destination (its whole phrase, e.g. "on the 
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-
 from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from referents.base import Alternative, Balance, Candidate, Design, Placement, ReferentConfig, object_alternatives, slug
+from referents.balance import Balance
+from referents.compose import slug
+from referents.design import Design, Placement
+from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
+from referents.schema import Candidate, ReferentConfig
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -21,7 +23,7 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("objects_per_scene", "goal scenes hold exactly 4 objects: carried, other, two destinations")
 
 
-def phrase(cfg: ReferentConfig, destination: Candidate) -> str:
+def _phrase(cfg: ReferentConfig, destination: Candidate) -> str:
     return f"{cfg.extra.get('prepositions', {}).get(destination.name, 'on')} the {destination.name}"
 
 
@@ -39,14 +41,14 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     template = balance.pick("template", cfg.templates)
 
     def say(destination: Candidate) -> str:
-        return template.format(object=carried.name, destination=phrase(cfg, destination))
+        return template.format(object=carried.name, destination=_phrase(cfg, destination))
 
     return Design(
         placements=tuple(sorted(placements, key=lambda p: p.slot)),
         target=placements[0].id,
         template=template,
         instruction=say(goal),
-        counterfactuals=(Counterfactual(say(other), placements[1].id, (phrase(cfg, goal), phrase(cfg, other))),),
+        counterfactuals=(Counterfactual(say(other), placements[1].id, (_phrase(cfg, goal), _phrase(cfg, other))),),
         task=TaskSpec(program="place", params={"object": placements[2].id}),
     )
 
@@ -61,7 +63,10 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     carried = spec.object(spec.task.params["object"])
     destinations = [o.id for o in spec.objects if o.kind in {c.kind for c in cfg.role("destination")}]
 
-    def extra(o: SceneObject) -> dict[str, Hashable]:
-        return {"carried object and destination": (carried.name, o.name), "carried object slot and slot": (carried.slot, o.slot)}
+    def extra(o: SceneObject) -> dict[str, Feature]:
+        return {
+            "carried object and destination": Feature((carried.name, o.name), IDENTITY),
+            "carried object slot and slot": Feature((carried.slot, o.slot), POSITION | IDENTITY),
+        }
 
     return object_alternatives(cfg, spec, destinations, extra)

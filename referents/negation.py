@@ -7,7 +7,10 @@ swap the shape word (the other shape's object of the target's color becomes the 
 from __future__ import annotations
 
 from core.spec import Counterfactual
-from referents.base import Balance, Design, ReferentConfig, crossed_scene
+from referents.balance import Balance
+from referents.compose import crossed_scene
+from referents.design import Design
+from referents.schema import ReferentConfig
 
 CONFOUNDS = ("position",)
 

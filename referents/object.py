@@ -1,8 +1,11 @@
-"""Object referent: the instruction names the target by its noun (see referents.base.naming_design)."""
+"""Object referent: the instruction names the target by its noun (see referents.compose.naming_design)."""
 
 from __future__ import annotations
 
-from referents.base import Balance, Design, ReferentConfig, naming_design
+from referents.balance import Balance
+from referents.compose import naming_design
+from referents.design import Design
+from referents.schema import ReferentConfig
 
 CONFOUNDS = ("position",)
 

@@ -7,12 +7,13 @@ counted side. The swap counterfactual names each other block by its rank from th
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-
 from core.spec import Counterfactual, EpisodeSpec, SceneObject
-from referents.base import Alternative, Balance, Design, Placement, ReferentConfig, object_alternatives
+from referents.balance import Balance
+from referents.design import Design, Placement
+from referents.features import POSITION, Alternative, Feature, object_alternatives
+from referents.schema import ReferentConfig
 
-LAST = "last"
+_LAST = "last"
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -48,7 +49,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     block = balance.pick("instance", [c for c in cfg.objects if c.targetable])
     ordinals = list(cfg.extra["ordinals"])
     rank = _rank(target_pos, length, side)
-    word = LAST if rank == length and balance.pick(("say last", length), [True, False]) else ordinals[rank - 1]
+    word = _LAST if rank == length and balance.pick(("say last", length), [True, False]) else ordinals[rank - 1]
     template = balance.pick("template", cfg.templates)
     ids = [f"{block.key.replace(' ', '_')}_{p + 1}" for p in range(length)]
     placements = tuple(Placement(ids[p], block, row * columns + start + p) for p in range(length))
@@ -75,13 +76,13 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     place = {o.id: i for i, o in enumerate(row)}
     length = len(row)
 
-    def extra(o: SceneObject) -> dict[str, Hashable]:
+    def extra(o: SceneObject) -> dict[str, Feature]:
         p = place[o.id]
         return {
-            "rank from left": p,
-            "rank from right": length - 1 - p,
-            "row length and rank": (length, p),
-            "column": o.slot % columns,
+            "rank from left": Feature(p, POSITION),
+            "rank from right": Feature(length - 1 - p, POSITION),
+            "row length and rank": Feature((length, p), POSITION),
+            "column": Feature(o.slot % columns, POSITION),
         }
 
     alts = object_alternatives(cfg, spec, extra=extra)

@@ -7,12 +7,13 @@ alternatives: the anchor is never what is asked for.
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-
 from core.spec import Counterfactual, EpisodeSpec, SceneObject
-from referents.base import Alternative, Balance, Design, Placement, ReferentConfig, object_alternatives
+from referents.balance import Balance
+from referents.design import Design, Placement
+from referents.features import POSITION, Alternative, Feature, object_alternatives
+from referents.schema import ReferentConfig
 
-SIDES = ("left", "right")
+_SIDES = ("left", "right")
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -29,9 +30,9 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     block = balance.pick("instance", [c for c in cfg.role("referent") if c.targetable])
     row = balance.pick("row", list(range(len(cfg.layout.slots) // columns)))
     column = balance.pick("anchor column", list(range(1, columns - 1)))
-    side = balance.pick(("side", anchor.key), list(SIDES), also="side")
+    side = balance.pick(("side", anchor.key), list(_SIDES), also="side")
     anchor_slot = row * columns + column
-    ids = {s: f"{block.key.replace(' ', '_')}_{s}" for s in SIDES}
+    ids = {s: f"{block.key.replace(' ', '_')}_{s}" for s in _SIDES}
     placements = (
         Placement(ids["left"], block, anchor_slot - 1),  # columns run from the robot's left
         Placement(anchor.key.replace(" ", "_"), anchor, anchor_slot),
@@ -42,7 +43,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     def say(s: str) -> str:
         return template.format(name=block.name, side=s, anchor=anchor.name, **block.attributes)
 
-    other = SIDES[1 - SIDES.index(side)]
+    other = _SIDES[1 - _SIDES.index(side)]
     return Design(
         placements=placements,
         target=ids[side],
@@ -59,8 +60,12 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     def side(o: SceneObject) -> str:
         return "left" if o.pos[1] > anchor.pos[1] else "right"
 
-    def extra(o: SceneObject) -> dict[str, Hashable]:
-        return {"side": side(o), "anchor and side": (anchor.name, side(o)), "anchor slot and side": (anchor.slot, side(o))}
+    def extra(o: SceneObject) -> dict[str, Feature]:
+        return {
+            "side": Feature(side(o), POSITION),
+            "anchor and side": Feature((anchor.name, side(o)), POSITION),
+            "anchor slot and side": Feature((anchor.slot, side(o)), POSITION),
+        }
 
     alts = object_alternatives(cfg, spec, [o.id for o in blocks], extra)
     return [Alternative(a.id, side(spec.object(a.id)), a.slot, a.features) for a in alts]

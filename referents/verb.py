@@ -9,7 +9,11 @@ from __future__ import annotations
 
 from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, TaskSpec
-from referents.base import Alternative, Balance, Design, ReferentConfig, choose_scene, object_features
+from referents.balance import Balance
+from referents.compose import choose_scene
+from referents.design import Design
+from referents.features import Alternative, Feature, object_features
+from referents.schema import ReferentConfig
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -56,7 +60,9 @@ def answer(spec: EpisodeSpec) -> str:
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     obj = spec.object(spec.target)
     base = object_features(spec, obj)
-    return [
-        Alternative(p, verb, obj.slot, {"program": p, **{f"{k} and program": (v, p) for k, v in base.items()}})
-        for p, verb in cfg.extra["verbs"].items()
-    ]
+
+    def crossed(p: str) -> dict[str, Feature]:
+        """The program, and every object variable paired with it (same families)."""
+        return {"program": Feature(p), **{f"{k} and program": Feature((f.value, p), f.family) for k, f in base.items()}}
+
+    return [Alternative(p, verb, obj.slot, crossed(p)) for p, verb in cfg.extra["verbs"].items()]

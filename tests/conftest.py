@@ -1,4 +1,6 @@
-"""Shared fixtures: one small generated dataset per test session, made by the real pipeline."""
+"""Shared fixtures (one small generated dataset per test session, made by the real pipeline) and
+the fast lane: `make test-fast` runs the tests marked `fast` — the pure core, planning, the audit
+and the command lines, nothing that simulates — in a few minutes; `make test` runs everything."""
 
 from __future__ import annotations
 
@@ -12,6 +14,20 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from helpers import make_dataset  # noqa: E402
+
+# Modules whose tests simulate nothing (a test among them that does is marked `slow`).
+FAST_MODULES = {"test_spec", "test_plan", "test_shape", "test_fuzz", "test_referent_specs", "test_cli", "test_reader"}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "fast: simulator-free; part of `make test-fast`")
+    config.addinivalue_line("markers", "slow: simulates or trains, though its module is in the fast lane")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        if item.module.__name__ in FAST_MODULES and not item.get_closest_marker("slow"):
+            item.add_marker(pytest.mark.fast)
 
 
 @pytest.fixture(scope="session")

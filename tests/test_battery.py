@@ -17,8 +17,9 @@ import referents
 from core import parquet
 from core.exam import read
 from core.spec import SimSettings
-from eval.__main__ import take
-from eval.policies import Context, make
+from eval.battery import take
+from eval.policies import Context, PolicyError
+from eval.registry import make, names, register
 from eval.rollout import Runner
 from gen import scenes
 from gen.plan import plan
@@ -121,6 +122,24 @@ def test_bad_actions_fail_their_trial_and_the_run_goes_on(small_exam: Path, tmp_
     assert report["faces"]["task"]["k"] == 0
     occluded = exam.trials[exam.trials.face == "occ"].iloc[0]
     assert Runner(make("nothing")).run(occluded).error is None
+
+
+def test_policies_are_made_by_registered_name() -> None:
+    """eval registers its own policies; train's `ckpt` comes from its entry point, so eval never
+    imports train. A name with a missing or surplus argument is one clear line."""
+    assert names()[:5] == ["oracle", "position", "nothing", "random", "remote:HOST:PORT"] and "ckpt:PATH" in names()
+    for name, needle in [
+        ("telepathy", "unknown policy 'telepathy'; registered: oracle, position, nothing, random, remote:HOST:PORT"),
+        ("ckpt", "policy ckpt needs an argument: ckpt:PATH"),
+        ("oracle:x", "policy oracle takes no argument"),
+        ("remote:nohost", "must be HOST:PORT"),
+        ("ckpt:/nowhere", "no checkpoint at /nowhere"),
+    ]:
+        with pytest.raises(PolicyError) as caught:
+            make(name)
+        assert needle in str(caught.value) and "\n" not in str(caught.value)
+    register("broken", Broken)
+    assert isinstance(make("broken"), Broken) and "broken" in names()
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:

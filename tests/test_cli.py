@@ -85,3 +85,40 @@ def test_overwrite_replaces_only_when_done(existing: Path) -> None:
     assert (existing / "meta/info.json").exists() and not (existing / "keep.txt").exists()
     assert "wrote 1 episodes" in result.stdout
     assert not [p for p in existing.parent.iterdir() if p.name.startswith(".")], "staging left behind"
+
+
+ROOT = Path(__file__).resolve().parent.parent
+# Every command line, and whether it takes a folder as its positional argument.
+ENTRY_POINTS = [
+    ("gen", False),
+    ("gen.check", True),
+    ("gen.verify", True),
+    ("gen.preview", True),
+    ("gen.push", True),
+    ("eval", False),
+    ("eval.score", False),
+    ("eval.serve", False),
+    ("train", False),
+    ("train.experiment", False),
+    ("bench/generate.py", False),
+    ("bench/compare.py", False),
+    ("bench/eval.py", False),
+]
+
+
+@pytest.mark.parametrize(("command", "positional"), ENTRY_POINTS)
+def test_every_entry_point_has_help_and_refuses_unknown_options(command: str, positional: bool, tmp_path: Path) -> None:
+    """`--help` prints the usage and exits 0; an unknown option gets one line and exit 2; neither does any work."""
+    argv = [sys.executable, str(ROOT / command)] if command.endswith(".py") else [sys.executable, "-m", command]
+    cwd, folder = tmp_path / "cwd", tmp_path / "folder"
+    cwd.mkdir()
+    folder.mkdir()
+    env = {**os.environ, "MUJOCO_GL": "egl"}
+    shown = subprocess.run([*argv, "--help"], capture_output=True, text=True, env=env, cwd=cwd)
+    assert shown.returncode == 0 and "usage:" in shown.stdout, shown.stdout + shown.stderr
+    bad = subprocess.run(
+        [*argv, *([str(folder)] if positional else []), "bogus_option=1"], capture_output=True, text=True, env=env, cwd=cwd
+    )
+    lines = bad.stderr.strip().splitlines()
+    assert bad.returncode == 2 and len(lines) == 1 and "bogus_option" in lines[0], bad.stderr
+    assert not any(cwd.iterdir()) and not any(folder.iterdir())

@@ -17,7 +17,7 @@ from gen.audit import audit
 from gen.cli import UserError
 from gen.config import GenConfig, parse
 from gen.plan import designs, realize
-from referents.base import ReferentSpecError
+from referents.schema import ReferentSpecError
 
 FUZZ = settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
 KEYS = list(GenConfig.__dataclass_fields__) + ["nonsense", "lora.rank", "n.x", ""]

@@ -110,6 +110,16 @@ def test_holdout_and_distractor_only() -> None:
     assert not report["unexpected_leaks"]
 
 
+def test_restricted_targets_make_every_identity_leak_expected() -> None:
+    """Families are declared with the features: the co-appearing categories of a category scene
+    are identity, though no word in their name says so."""
+    ref = referents.load("category", overrides={"targets": ["toy"]})
+    report = audit(ref, plan(ref, 120, seed=0, sim=SimSettings()))
+    leaked = {v["variable"]: v["expected"] for v in report["variables"] if v["leak"]}
+    assert {"identity", "co-appearing categories"} <= set(leaked) and all(leaked.values())
+    assert not report["unexpected_leaks"]
+
+
 def test_unsupported_confound_is_refused() -> None:
     with pytest.raises(ValueError, match="confound"):
         referents.load("ordinal", overrides={"confound": "position"})

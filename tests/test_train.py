@@ -14,8 +14,8 @@ import pytest
 
 from core.exam import read
 from core.layout import NATIVE
-from eval.__main__ import take
-from eval.policies import make
+from eval.battery import take
+from eval.registry import make
 from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
 from gen.video import encode_episode

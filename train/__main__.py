@@ -7,10 +7,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from gen.cli import UserError, compose_config, usage
+from gen.cli import UserError, main
 from train.fit import TrainConfig
-
-USAGE = usage("python -m train", TrainConfig)
 
 
 def validate(cfg: TrainConfig) -> None:
@@ -25,30 +23,23 @@ def validate(cfg: TrainConfig) -> None:
         raise UserError(f"lora.rank must be at least 1, got {cfg.lora.rank}")
 
 
-def main(argv: list[str]) -> int:
-    if any(a in ("-h", "--help", "help") for a in argv):
-        print(USAGE)
-        return 0
+def train(cfg: TrainConfig) -> None:
+    validate(cfg)
     from train import data
+    from train.fit import fit
 
     try:
-        cfg = compose_config("train", TrainConfig, argv)
-        validate(cfg)
         data.check(Path(cfg.dataset), cfg.image_size)
-        from train.fit import fit
-
         summary = fit(cfg)
-    except (UserError, data.DatasetError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    except ValueError as exc:  # the dataset (data.DatasetError) or resume=true over another model config
+        raise UserError(str(exc)) from None
     print(
         f"trained {summary['steps']} steps ({summary['trainable_parameters']:,} trainable parameters) on "
         f"{summary['frames']} frames, {summary['tasks']} instructions; final loss {summary['final_loss']:.4f}; "
         f"wrote {cfg.out}/model.pt"
     )
     print(f"take an exam with: python -m eval policy=ckpt:{cfg.out} exam=<exam dir>")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m train", TrainConfig, train, doc=__doc__))

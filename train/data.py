@@ -10,15 +10,17 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import av
 import numpy as np
 
-from core import parquet
+from core import cache_dir, parquet
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from gen.lerobot_reader import INFO_PATH, TASKS_PATH, LeRobotReader
+from gen.lerobot_writer import EPISODES_PATH
+from gen.partial import GENERATION_PATH
+from gen.scenes import SCENES_PATH
 
 CAMERAS = NATIVE.camera_names
 STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
@@ -54,15 +56,15 @@ class Frames:
 
 def check(root: Path, image_size: int | None = None) -> dict:
     """Validate a dataset for training; returns its info.json."""
-    info_path = root / "meta/info.json"
+    info_path = root / INFO_PATH
     if not info_path.is_file():
-        raise DatasetError(f"{root} is not a LeRobot dataset (no meta/info.json)")
+        raise DatasetError(f"{root} is not a LeRobot dataset (no {INFO_PATH})")
     try:
         info = json.loads(info_path.read_text())
     except json.JSONDecodeError as exc:
         raise DatasetError(f"{info_path} is corrupt: {exc}") from None
-    generation = root / "meta/generation.json"
-    if (root / "meta/scenes.parquet").is_file() and (
+    generation = root / GENERATION_PATH
+    if (root / SCENES_PATH).is_file() and (
         not generation.is_file() or json.loads(generation.read_text()).get("complete") is not True
     ):
         raise DatasetError(f"{root} is an incomplete generated dataset (no completion marker); resume its generation first")
@@ -86,7 +88,7 @@ def check(root: Path, image_size: int | None = None) -> dict:
             f"{root}: frames are {height} px but image_size={image_size}; "
             f"train with image_size={height} or regenerate the dataset with image_size={image_size}"
         )
-    tasks = parquet.read(root / "meta/tasks.parquet")
+    tasks = parquet.read(root / TASKS_PATH)
     if len(tasks) < 2:
         raise DatasetError(
             f"{root}: no instruction diversity: every episode has the same instruction, so nothing could teach "
@@ -95,61 +97,34 @@ def check(root: Path, image_size: int | None = None) -> dict:
     return info
 
 
-def _cache_dir() -> Path:
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "deconfound"
-
-
 def _key(root: Path) -> str:
     digest = hashlib.sha256()
-    for rel in ("meta/info.json", "meta/episodes/chunk-000/file-000.parquet"):
+    for rel in (INFO_PATH, EPISODES_PATH):
         digest.update((root / rel).read_bytes())
     return digest.hexdigest()[:20]
 
 
-def _decode(root: Path, info: dict, episodes, camera: str, total: int) -> np.ndarray:  # noqa: ANN001
-    """Every frame of one camera, in dataset order."""
-    key = f"observation.images.{camera}"
-    size = info["features"][key]["shape"][0]
-    out = np.empty((total, size, size, 3), np.uint8)
-    files = sorted({(int(r[f"videos/{key}/chunk_index"]), int(r[f"videos/{key}/file_index"])) for _, r in episodes.iterrows()})
-    fps = info["fps"]
-    for chunk, file in files:
-        eps = episodes[(episodes[f"videos/{key}/chunk_index"] == chunk) & (episodes[f"videos/{key}/file_index"] == file)]
-        where: dict[int, int] = {}  # frame number in the file -> frame index in the dataset
-        for _, r in eps.iterrows():
-            first = int(round(r[f"videos/{key}/from_timestamp"] * fps))
-            for k in range(int(r["length"])):
-                where[first + k] = int(r["dataset_from_index"]) + k
-        path = root / info["video_path"].format(video_key=key, chunk_index=chunk, file_index=file)
-        with av.open(str(path)) as container:
-            for k, frame in enumerate(container.decode(container.streams.video[0])):
-                if k in where:
-                    out[where[k]] = frame.to_ndarray(format="rgb24")
-    return out
-
-
 def load(root: Path | str, image_size: int | None = None) -> Frames:
     root = Path(root)
-    info = check(root, image_size)
-    data = parquet.read(root / "data").sort_values("index")
-    episodes = parquet.read(root / "meta/episodes").sort_values("episode_index")
-    tasks = parquet.read(root / "meta/tasks.parquet").sort_values("task_index")
-    stats = {k: {s: np.asarray(v) for s, v in d.items()} for k, d in json.loads((root / "meta/stats.json").read_text()).items()}
-    total = len(data)
-    cache = _cache_dir() / f"{_key(root)}.npz"
+    check(root, image_size)
+    dataset = LeRobotReader(root)
+    data, episodes = dataset.data, dataset.episodes
+    tasks = dataset.tasks.sort_values("task_index")
+    stats = {k: {s: np.asarray(v) for s, v in d.items()} for k, d in dataset.stats.items()}
+    cache = cache_dir() / f"{_key(root)}.npz"
     if cache.is_file():
         with np.load(cache) as npz:
             images = {c: npz[c] for c in CAMERAS}
     else:
-        images = {c: _decode(root, info, episodes, c, total) for c in CAMERAS}
+        images = {c: dataset.camera_frames(c) for c in CAMERAS}
         cache.parent.mkdir(parents=True, exist_ok=True)
         tmp = cache.with_suffix(".tmp.npz")
         np.savez(tmp, **images)
         tmp.replace(cache)
     return Frames(
         images=images,
-        state=np.stack(data["observation.state"].to_numpy()).astype(np.float32),
-        action=np.stack(data["action"].to_numpy()).astype(np.float32),
+        state=np.stack(data[STATE_KEY].to_numpy()).astype(np.float32),
+        action=np.stack(data[ACTION_KEY].to_numpy()).astype(np.float32),
         episode=data["episode_index"].to_numpy(np.int64),
         task=data["task_index"].to_numpy(np.int64),
         tasks=list(tasks.index),
@@ -162,7 +137,7 @@ def load(root: Path | str, image_size: int | None = None) -> Frames:
 
 def _targets(root: Path) -> np.ndarray | None:
     """Start position of each episode's target object (None for datasets without scene records)."""
-    path = root / "meta/scenes.parquet"
+    path = root / SCENES_PATH
     if not path.is_file():
         return None
     records = parquet.read(path).sort_values("episode_index")

@@ -1,7 +1,6 @@
 """The end-to-end experiment: does deconfounded data make a policy read its instruction?
 
-    python -m train.experiment [n=600] [steps=3000] [trials=30] [image_size=96] [out=runs/experiment]
-                               [finetunes=lora,full] [docs=docs]
+python -m train.experiment n=600 steps=3000 trials=30 image_size=96 out=runs/experiment
 
 On the object axis: generate a confounded training set (`confound=position`: the target always
 in the canonical slot) and a deconfounded one of the same size, fine-tune the tiny policy on
@@ -15,54 +14,83 @@ from __future__ import annotations
 import json
 import sys
 import time
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from core.exam import read
-from eval.__main__ import take
-from gen.config import parse
-from gen.run import generate
-from train.fit import LoraOptions, TrainConfig, fit
-from train.policy import MODEL_FILE, CheckpointPolicy
+from gen.cli import Failed, UserError, main
+from gen.config import GenConfig, parse
 
-DEFAULTS = {"n": "600", "steps": "3000", "trials": "30", "image_size": "96", "out": "runs/experiment", "seed": "0"}
+FINETUNES = ("lora", "full", "frozen")
 
 
-def _generate(args: list[str], out: Path, log: list[str]) -> None:
-    log.append("python -m gen " + " ".join(args) + f" out={out}")
-    if not (out / "meta").is_dir() and not (out / "exam.json").is_file():
-        generate(parse([*args, f"out={out}", "overwrite=true"]))
+@dataclass
+class ExperimentOptions:
+    n: int = 600  # episodes in each training set
+    steps: int = 3000  # training steps per checkpoint
+    trials: int = 30  # trials in the held-out exam
+    image_size: int = 96  # camera frames in pixels, for the data, the exam and the policy
+    out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
+    seed: int = 0  # the training sets' seed (the exam's is seed + 1)
+    finetunes: list[str] = field(default_factory=lambda: ["lora", "full"])  # fine-tunes trained on each set: lora, full, frozen
+    docs: str = "docs"  # where RESULTS.md and results.json go
 
 
-def run(opts: dict[str, str]) -> dict:
-    o = {**DEFAULTS, **opts}
-    root = Path(o["out"])
-    size, n, seed = o["image_size"], o["n"], o["seed"]
+def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
+    """Stage name -> (`python -m gen` options, folder): the two training sets and the exam."""
+    root, size = Path(options.out), f"image_size={options.image_size}"
+    train = ["referent=object", f"n={options.n}", f"seed={options.seed}", size]
+    return {
+        "confounded": ([*train, "confound=position"], root / "data" / "confounded"),
+        "deconfounded": (train, root / "data" / "deconfounded"),
+        "exam": (["referent=object", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}", size], root / "exam"),
+    }
+
+
+def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
+    """Every stage's generation config, validated before anything runs."""
+    for name in ("steps", "trials"):  # n and image_size are checked as `python -m gen` options of the same names
+        if getattr(options, name) < 1:
+            raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
+    unknown = [f for f in options.finetunes if f not in FINETUNES]
+    if unknown or not options.finetunes:
+        raise UserError(f"finetunes must be some of {', '.join(FINETUNES)}, got {options.finetunes}")
+    return {name: parse([*args, f"out={out}", "overwrite=true"]) for name, (args, out) in _datasets(options).items()}
+
+
+def run(options: ExperimentOptions) -> dict:
+    configs = _configs(options)
+    from eval.battery import take  # the simulator and torch load only for valid input
+    from gen.run import generate
+    from train.fit import LoraOptions, TrainConfig, fit
+    from train.policy import MODEL_FILE, CheckpointPolicy
+
+    root, stages = Path(options.out), _datasets(options)
     commands: list[str] = []
     timings: dict[str, float] = {}
-    data = {}
-    for name, extra in (("confounded", ["confound=position"]), ("deconfounded", [])):
+    for name, (args, out) in stages.items():
+        commands.append("python -m gen " + " ".join(args) + f" out={out}")
         t = time.perf_counter()
-        data[name] = root / "data" / name
-        _generate(["referent=object", f"n={n}", f"seed={seed}", f"image_size={size}", *extra], data[name], commands)
+        if not (out / "meta").is_dir() and not (out / "exam.json").is_file():
+            generate(configs[name])
         timings[f"generate {name}"] = time.perf_counter() - t
-    exam_dir = root / "exam"
-    _generate(
-        ["referent=object", f"n={o['trials']}", "split=exam", f"seed={int(seed) + 1}", f"image_size={size}"], exam_dir, commands
-    )
+    exam_dir = stages["exam"][1]
     exam = read(exam_dir)
     rows = []
-    for name in data:
-        for finetune in o.get("finetunes", "lora,full").split(","):
+    for name in ("confounded", "deconfounded"):
+        data = stages[name][1]
+        for finetune in options.finetunes:
             ckpt = root / "ckpt" / f"{name}-{finetune}"
-            cfg = TrainConfig(
-                dataset=str(data[name]), out=str(ckpt), finetune=finetune, steps=int(o["steps"]), lora=LoraOptions(16)
-            )
+            cfg = TrainConfig(dataset=str(data), out=str(ckpt), finetune=finetune, steps=options.steps, lora=LoraOptions(16))
             commands.append(
-                f"python -m train dataset={data[name]} policy=tiny finetune={finetune} lora.rank=16 steps={o['steps']} out={ckpt}"
+                f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} out={ckpt}"
             )
             t = time.perf_counter()
             if not (ckpt / MODEL_FILE).is_file():
-                fit(cfg)
+                try:
+                    fit(cfg)
+                except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
+                    raise Failed(f"training {ckpt}: {exc}") from None
             timings[f"train {name} {finetune}"] = time.perf_counter() - t
             report_dir = root / "reports" / f"{name}-{finetune}"
             commands.append(f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} workers=2 out={report_dir}")
@@ -86,7 +114,13 @@ def run(opts: dict[str, str]) -> dict:
                     "trainable_parameters": train_log["trainable_parameters"],
                 }
             )
-    return {"settings": o, "rows": rows, "commands": commands, "timings_s": {k: round(v, 1) for k, v in timings.items()}}
+    timings_s = {k: round(v, 1) for k, v in timings.items()}
+    return {"settings": asdict(options), "rows": rows, "commands": commands, "timings_s": timings_s}
+
+
+def _value(v: object) -> str:
+    """An option's value as it is written on the command line."""
+    return f"[{','.join(map(str, v))}]" if isinstance(v, list) else str(v)
 
 
 def _cell(face: dict) -> str:
@@ -100,7 +134,7 @@ def write_docs(results: dict, docs: Path) -> None:
     lines = [
         "# Results: deconfounded data x low-rank update, object axis",
         "",
-        f"Generated by `python -m train.experiment` ({', '.join(f'{k}={v}' for k, v in s.items())}). "
+        f"Generated by `python -m train.experiment` ({', '.join(f'{k}={_value(v)}' for k, v in s.items())}). "
         f"Training sets: {s['n']} oracle demonstrations each at {s['image_size']} px; the held-out exam has "
         f"{s['trials']} trials (task, a swap for every other object, occ, nonsense). Rates carry k/n and a Wilson 95% "
         "interval; chance for obeyed-name/true-target is 1 / (objects in the scene).",
@@ -129,13 +163,11 @@ def write_docs(results: dict, docs: Path) -> None:
     (docs / "RESULTS.md").write_text("\n".join(lines) + "\n")
 
 
-def main(argv: list[str]) -> int:
-    opts = dict(a.split("=", 1) for a in argv)
-    results = run(opts)
-    write_docs(results, Path(opts.get("docs", "docs")))
-    print((Path(opts.get("docs", "docs")) / "RESULTS.md").read_text())
-    return 0
+def experiment(options: ExperimentOptions) -> None:
+    results = run(options)
+    write_docs(results, Path(options.docs))
+    print((Path(options.docs) / "RESULTS.md").read_text())
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main("python -m train.experiment", ExperimentOptions, experiment, doc=__doc__))

@@ -2,16 +2,23 @@
 
 A checkpoint folder holds `model.pt`: the model config, the dataset stats and the weights that
 training changed (the pretrained text tower is rebuilt from its package, then patched).
+
+`CheckpointPolicy` is the `ckpt` entry point of the `deconfound.policies` group (pyproject.toml),
+so eval finds it by name without importing train; torch loads only when a checkpoint is read.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from core.layout import NATIVE
-from train.model import CAMERAS, ModelConfig, TinyPolicy
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from eval.policies import Context, PolicyError
+
+if TYPE_CHECKING:
+    from train.model import TinyPolicy
 
 MODEL_FILE = "model.pt"
 
@@ -33,6 +40,8 @@ def load(path: Path | str) -> tuple[TinyPolicy, dict]:
     """A model from a checkpoint folder (or file); returns the model and the whole record."""
     import torch
 
+    from train.model import ModelConfig, TinyPolicy
+
     path = Path(path)
     file = path / MODEL_FILE if path.is_dir() else path
     if not file.is_file():
@@ -45,7 +54,7 @@ def load(path: Path | str) -> tuple[TinyPolicy, dict]:
     weights = record["weights"]
     stats = {
         key: {"mean": weights[f"{name}_mean"].numpy(), "std": weights[f"{name}_std"].numpy()}
-        for key, name in (("observation.state", "state"), ("action", "action"))
+        for key, name in ((STATE_KEY, "state"), (ACTION_KEY, "action"))
     }
     model = TinyPolicy(config, stats)
     missing, unexpected = model.load_state_dict(weights, strict=False)
@@ -59,12 +68,11 @@ class CheckpointPolicy:
     """Runs a checkpoint in the battery: embeds each instruction once, predicts a chunk of
     actions and executes the first `replan` of them before looking again."""
 
+    argument = "PATH"  # written ckpt:PATH (eval/registry.py)
     needs_images = True
 
     def __init__(self, path: str, replan: int = 5) -> None:
         import torch
-
-        from eval.policies import PolicyError
 
         try:
             self.model, _ = load(path)
@@ -76,7 +84,7 @@ class CheckpointPolicy:
         self._embeddings: dict[str, object] = {}
         self._queue: list[np.ndarray] = []
 
-    def reset(self, context) -> None:  # noqa: ANN001
+    def reset(self, context: Context) -> None:
         self._queue = []
 
     def chunk(self, observation: dict) -> np.ndarray:
@@ -84,16 +92,17 @@ class CheckpointPolicy:
         import torch
 
         size = self.model.config.image_size
-        for cam in CAMERAS:
-            shape = observation[f"observation.images.{cam}"].shape
+        for cam in self.model.cameras:
+            shape = observation[NATIVE.image_key(cam)].shape
             if shape != (size, size, 3):
                 raise ValueError(f"{cam} frames are {shape}, the checkpoint was trained on {size} px")
         text = observation["task"]
         with torch.inference_mode():
             if text not in self._embeddings:
                 self._embeddings[text] = self.model.embed([text])
-            images = {c: torch.from_numpy(np.ascontiguousarray(observation[NATIVE.image_key(c)]))[None] for c in CAMERAS}
-            state = torch.from_numpy(np.asarray(observation["observation.state"], np.float32))[None]
+            frames = {c: np.ascontiguousarray(observation[NATIVE.image_key(c)]) for c in self.model.cameras}
+            images = {c: torch.from_numpy(frame)[None] for c, frame in frames.items()}
+            state = torch.from_numpy(np.asarray(observation[STATE_KEY], np.float32))[None]
             actions, _ = self.model(images, state, self._embeddings[text])
             return self.model.denormalise(actions)[0].numpy()
 

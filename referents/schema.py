@@ -1,25 +1,22 @@
-"""What every referent type shares: its declarative config, the role balancer, the design it
-returns for one episode (the discrete choices; poses are realised in gen/plan.py), and the
-helpers most types are built from.
-"""
+"""A referent type's declarative spec (referents/<type>.yaml): its schema, validated on load so
+that a bad file gets one line naming the field before anything is planned or simulated."""
 
 from __future__ import annotations
 
 import itertools
 from collections import Counter
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import yaml
 
 from core import catalog
-from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
+from core.spec import TaskSpec
 from core.world import TABLE_SIZE
 
-T = TypeVar("T")
 CONFOUNDS = ("position",)
 
 
@@ -177,7 +174,8 @@ class ReferentConfig:
         )
 
     def assets(self) -> tuple[tuple[str, int], ...]:
-        """The model inventory: enough bodies of each kind for any scene of this referent."""
+        """The default model inventory (a type's `assets`): one body per object of a kind, at most
+        `objects_per_scene`, which is enough for any scene that holds each object at most once."""
         per_kind = Counter(c.kind for c in self.objects)
         return tuple(sorted((kind, min(n, self.objects_per_scene)) for kind, n in per_kind.items()))
 
@@ -247,206 +245,3 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> Layout:
     if not 0 <= layout.canonical_slot < len(slots):
         raise fail("layout.canonical_slot", f"must index layout.slots (0..{len(slots) - 1})")
     return layout
-
-
-@dataclass(frozen=True)
-class Placement:
-    """A candidate put at a slot under a scene-unique id."""
-
-    id: str
-    candidate: Candidate
-    slot: int
-
-
-@dataclass(frozen=True)
-class Design:
-    """The discrete choices of one episode, before poses are realised."""
-
-    placements: tuple[Placement, ...]
-    target: str
-    template: str
-    instruction: str
-    counterfactuals: tuple[Counterfactual, ...]
-    task: TaskSpec | None = None  # None: the referent's task
-
-
-@dataclass(frozen=True)
-class Alternative:
-    """One of the things an instruction could ask for in a scene, as the confound audit sees it:
-    `value` is what the instruction would call it, `features` are non-instruction variables."""
-
-    id: str
-    value: str
-    slot: int
-    features: dict[str, Hashable]
-
-
-class Balance:
-    """Greedy least-used choices with seeded tie-breaks.
-
-    Each choice takes an option whose count under `key` is lowest, so every prefix of a plan is
-    as balanced as the choices allow: with n episodes every value is chosen n/len(options) (+-1)
-    times, and (value, slot) pairs are all covered once n reaches their number.
-    """
-
-    def __init__(self, rng: np.random.Generator) -> None:
-        self.rng = rng
-        self.counts: Counter[tuple[Hashable, Hashable]] = Counter()
-
-    def pick(self, key: Hashable, options: Sequence[T], also: Hashable | None = None) -> T:
-        """Least-used option under `key`, ties broken by `also` (a second key), then at random."""
-        if not options:
-            raise ValueError(f"no options to choose {key!r} from")
-        scores = [(self.counts[(key, self._id(o))], self.counts[(also, self._id(o))] if also is not None else 0) for o in options]
-        best = min(scores)
-        ties = [o for o, s in zip(options, scores) if s == best]
-        choice = ties[int(self.rng.integers(len(ties)))]
-        self.counts[(key, self._id(choice))] += 1
-        if also is not None:
-            self.counts[(also, self._id(choice))] += 1
-        return choice
-
-    @staticmethod
-    def _id(option: Any) -> Hashable:
-        return option.key if isinstance(option, Candidate) else option
-
-
-def fill(template: str, candidate: Candidate, **words: str) -> str:
-    """A template filled with the candidate's name and attributes (and any extra words)."""
-    return template.format(name=candidate.name, **candidate.attributes, **words)
-
-
-def slug(text: str) -> str:
-    return text.replace(" ", "_")
-
-
-def target_slot(cfg: ReferentConfig, balance: Balance, key: Hashable, options: Sequence[int]) -> int:
-    """The target's slot: least used for `key`, or always the canonical one under confound=position."""
-    if cfg.confound == "position":
-        if cfg.layout.canonical_slot not in options:
-            raise ValueError("the canonical slot is not free")
-        return cfg.layout.canonical_slot
-    return balance.pick(("target_slot", key), list(options), also="slot")
-
-
-def choose_scene(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate], naming: str) -> list[Placement]:
-    """A target and `objects_per_scene - 1` distractors that each differ from every other in
-    the naming variable; the target comes first.
-
-    The target value is the least-used one, its instance the least-used of that value, at its
-    least-used slot; distractor values are the least-used as distractors, each instance at its
-    least-used free slot.
-    """
-    for c in pool:
-        if naming not in ("name", "key") and naming not in c.attributes:
-            raise cfg.fail("objects", f"{c.key!r} has no {naming!r} attribute, which names targets (naming: {naming})")
-    targets = [c for c in pool if c.targetable]
-    value = balance.pick("target", list(dict.fromkeys(c.word(naming) for c in targets)))
-    target = balance.pick(("instance", value), [c for c in targets if c.word(naming) == value])
-    slots = list(range(len(cfg.layout.slots)))
-    placements = [Placement(slug(target.key), target, target_slot(cfg, balance, target.key, slots))]
-    others = list(dict.fromkeys(c.word(naming) for c in pool if c.word(naming) != value))
-    if len(others) < cfg.objects_per_scene - 1:
-        raise cfg.fail("objects", f"needs {cfg.objects_per_scene} different {naming} values per scene, has {len(others) + 1}")
-    for _ in range(cfg.objects_per_scene - 1):
-        other = balance.pick("distractor", others)
-        others.remove(other)
-        d = balance.pick(("distractor_instance", other), [c for c in pool if c.word(naming) == other])
-        free = [s for s in slots if s not in {p.slot for p in placements}]
-        placements.append(Placement(slug(d.key), d, balance.pick(("distractor_slot", d.key), free, also="slot")))
-    return placements
-
-
-def naming_design(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate] | None = None) -> Design:
-    """One target named by a single word (its name, or an attribute) among distractors that
-    each have another value of it; the swap counterfactual names each distractor instead."""
-    placements = choose_scene(cfg, balance, cfg.objects if pool is None else pool, cfg.naming)
-    target = placements[0].candidate
-    template = balance.pick("template", cfg.templates)
-    return Design(
-        placements=tuple(sorted(placements, key=lambda p: p.slot)),
-        target=placements[0].id,
-        template=template,
-        instruction=fill(template, target),
-        counterfactuals=tuple(
-            Counterfactual(fill(template, p.candidate), p.id, (target.word(cfg.naming), p.candidate.word(cfg.naming)))
-            for p in placements[1:]
-        ),
-    )
-
-
-def object_features(spec: EpisodeSpec, obj: SceneObject) -> dict[str, Hashable]:
-    """Non-instruction variables of one object, for the confound audit."""
-    features: dict[str, Hashable] = {
-        "slot": obj.slot,
-        "x bin (5 cm)": int(np.floor(obj.pos[0] / 0.05)),
-        "y bin (5 cm)": int(np.floor(obj.pos[1] / 0.05)),
-        "identity": object_key(obj.name, obj.attributes),
-        "kind": obj.kind,
-        "composition": (
-            tuple(sorted(object_key(o.name, o.attributes) for o in spec.objects)),
-            object_key(obj.name, obj.attributes),
-        ),
-    }
-    for attr, value in obj.attributes.items():
-        features[f"{attr} at slot"] = (value, obj.slot)
-    return features
-
-
-def object_alternatives(
-    cfg: ReferentConfig,
-    spec: EpisodeSpec,
-    ids: Sequence[str] | None = None,
-    extra: Callable[[SceneObject], dict[str, Hashable]] | None = None,
-) -> list[Alternative]:
-    """Objects as alternatives (all of the scene's, or `ids`), valued by the naming variable."""
-    chosen = [spec.object(i) for i in ids] if ids is not None else list(spec.objects)
-    out = []
-    for o in chosen:
-        key = object_key(o.name, o.attributes)
-        value = {"name": o.name, "key": key}.get(cfg.naming) or o.attributes.get(cfg.naming, key)
-        features = object_features(spec, o) | (extra(o) if extra else {})
-        out.append(Alternative(o.id, value, o.slot, features))
-    return out
-
-
-@dataclass(frozen=True)
-class Crossed:
-    """Four objects crossing two values of an axis with two colors; `objects[(axis, color)]`."""
-
-    placements: tuple[Placement, ...]
-    objects: dict[tuple[str, str], Placement]
-    axis: tuple[str, str]  # (target's value, the other)
-    color: tuple[str, str]  # (target's color, the other)
-
-    @property
-    def target(self) -> Placement:
-        return self.objects[(self.axis[0], self.color[0])]
-
-
-def crossed_scene(cfg: ReferentConfig, balance: Balance, axis: str) -> Crossed:
-    """Two values of `axis` (e.g. shape or size) x two colors: every object shares one attribute
-    with two others, so no single word picks the target. The target is the least-used object;
-    the other axis value and the other color are the least used alongside it; slots as usual."""
-    table = {(c.word(axis), c.attributes.get("color", "")): c for c in cfg.objects}
-    axis_values = list(dict.fromkeys(a for a, _ in table))
-    colors = list(dict.fromkeys(col for _, col in table))
-    if len(axis_values) < 2 or len(colors) < 2 or len(table) != len(axis_values) * len(colors):
-        raise cfg.fail("objects", f"needs every {axis} in the same two or more colors")
-    target = balance.pick("target", [c for c in cfg.objects if c.targetable])
-    a_target, c_target = target.word(axis), target.attributes["color"]
-    a_other = balance.pick(("other", axis, a_target), [a for a in axis_values if a != a_target])
-    c_other = balance.pick(("other color", c_target), [col for col in colors if col != c_target])
-    slots = list(range(len(cfg.layout.slots)))
-    cells = [(a_target, c_target), (a_other, c_target), (a_target, c_other), (a_other, c_other)]
-    objects: dict[tuple[str, str], Placement] = {}
-    for i, cell in enumerate(cells):
-        cand = table[cell]
-        free = [s for s in slots if s not in {p.slot for p in objects.values()}]
-        slot = (
-            target_slot(cfg, balance, cand.key, free)
-            if i == 0
-            else balance.pick(("distractor_slot", cand.key), free, also="slot")
-        )
-        objects[cell] = Placement(slug(cand.key), cand, slot)
-    return Crossed(tuple(sorted(objects.values(), key=lambda p: p.slot)), objects, (a_target, a_other), (c_target, c_other))

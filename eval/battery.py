@@ -1,0 +1,51 @@
+"""Taking an exam: run its rollouts with a policy, log them, and score the logs.
+
+The report is computed from the written `rollouts.parquet`, exactly as the offline scorer
+(`python -m eval.score`) would, so a report never depends on how the rollouts were run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from core.exam import Exam
+from eval.policies import Policy
+from eval.report import write_reports
+from eval.rollout import Runner, run_chunk
+from eval.score import POLICY_KEY, read_logs, score
+
+
+def take(
+    exam: Exam, rows: pd.DataFrame, policy: Policy, out: Path, workers: int = 1, policy_name: str | None = None
+) -> tuple[dict, float]:
+    """Run `rows` (some or all of `exam.trials`) with `policy`, write rollouts.parquet and the
+    reports to `out`; returns the report and the seconds the rollouts took. With workers > 1
+    and a `policy_name`, contiguous chunks of rows run in processes that each rebuild the policy
+    from its name (eval/registry.py); the logs are the same either way."""
+    start = time.perf_counter()
+    if workers > 1 and policy_name is not None:
+        chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]
+        with multiprocessing.get_context("spawn").Pool(len(chunks)) as pool:
+            logs = [log for part in pool.starmap(run_chunk, [(policy_name, c) for c in chunks]) for log in part]
+    else:
+        runner = Runner(policy)
+        it = tqdm(rows.iterrows(), total=len(rows), desc=policy.name, unit="rollout")
+        logs = [runner.run(row).to_row() for _, row in it]
+        runner.close()
+    seconds = time.perf_counter() - start
+    out.mkdir(parents=True, exist_ok=True)
+    table = pa.Table.from_pylist(logs)
+    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode()}), out / "rollouts.parquet")
+    logged, _ = read_logs(out / "rollouts.parquet")
+    report = score(dataclasses.replace(exam, trials=rows.reset_index(drop=True)), logged, policy.name)
+    write_reports(out, report)
+    return report, seconds

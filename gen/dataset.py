@@ -1,0 +1,151 @@
+"""The dataset builder: an audited plan -> verified oracle demos -> a LeRobot v3.0 dataset.
+
+Episodes are produced into a resumable partial folder beside `out` (gen/partial.py), assembled
+into the LeRobot files only once all exist, audited again as written, and moved to `out` in one
+rename with `meta/generation.json` inside, so an interrupted run never leaves a half-written
+dataset at `out` and never destroys the one that was there.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from core.layout import NATIVE
+from core.spec import EpisodeSpec
+from gen import card, faults, scenes
+from gen.audit import agree, audit
+from gen.cli import UserError
+from gen.config import GenConfig
+from gen.partial import GENERATION_PATH, Partial
+from gen.plan import Planned
+from gen.provenance import Provenance, run_record
+
+AUDIT_PATH = "meta/audit.json"
+
+
+@dataclass
+class DatasetSummary:
+    out: Path
+    episodes: int
+    frames: int
+    failed_attempts: int
+    seconds: float
+    verdict: str
+
+    def __str__(self) -> str:
+        attempts = self.episodes + self.failed_attempts
+        return (
+            f"wrote {self.episodes} episodes ({self.frames} frames) to {self.out}\n"
+            f"oracle: {self.failed_attempts} failed demos resampled; success before retries "
+            f"{self.episodes}/{attempts} = {self.episodes / attempts:.1%}\n"
+            f"confound audit: {self.verdict}\n"
+            f"wall time {self.seconds:.1f} s, {self.frames / self.seconds:.1f} frames/s, "
+            f"{self.seconds / self.episodes:.2f} s/episode"
+        )
+
+
+@dataclass
+class AlreadyComplete:
+    out: Path
+    episodes: int
+
+    def __str__(self) -> str:
+        return f"{self.out} is already complete ({self.episodes} episodes, same options); nothing to do"
+
+
+def already_complete(cfg: GenConfig, out: Path, generation: dict) -> AlreadyComplete:
+    """`resume=true` on a finished run (a requeued job that had in fact completed): a no-op when
+    the options match, refused naming the first option that differs otherwise."""
+    recorded, wanted = generation.get("run") or {}, run_record(cfg)
+    changed = [k for k in wanted if recorded.get(k) != wanted[k]]
+    if changed:
+        name = "spec" if changed[0] == "spec_text" else changed[0]
+        raise UserError(
+            f"resume=true, but the complete dataset at out={out} was made with another {name} "
+            f"({recorded.get(changed[0], 'unrecorded')!r}, not {wanted[changed[0]]!r}); pass overwrite=true to replace it"
+        )
+    return AlreadyComplete(out, generation["episodes"])
+
+
+def write_audit(root: Path, audits: dict) -> None:
+    (root / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
+
+
+def write_generation(root: Path, provenance: Provenance, episodes: int, failed_attempts: int, seconds: float) -> None:
+    """Written last: its presence marks the product complete."""
+    record = provenance.generation(episodes, failed_attempts, seconds)
+    (root / GENERATION_PATH).write_text(json.dumps(record, indent=2, default=str))
+
+
+def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, started: float, progress: bool) -> DatasetSummary:
+    partial = Partial(out)
+    if partial.exists and cfg.overwrite and not cfg.resume:
+        shutil.rmtree(partial.root)
+    try:
+        done = partial.start(run_record(cfg), cfg.resume)
+    except (FileExistsError, ValueError) as exc:
+        raise UserError(str(exc)) from None
+    failed = _simulate(cfg, planned, partial, done, progress)
+    root = partial.fresh_dataset()
+    rows, frames, written = _assemble(cfg, planned, partial, root)
+    audits = {"planned": planned.audit, "written": audit(planned.referent, written)}
+    audits["agree"] = agree(audits["planned"], audits["written"])
+    if not audits["agree"]:
+        raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
+    scenes.write(root, rows)
+    write_audit(root, audits)
+    seconds = time.perf_counter() - started
+    summary = DatasetSummary(out, len(rows), frames, failed, seconds, audits["written"]["verdict"])
+    contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps)
+    card.write(root, planned.referent, provenance, audits["written"], contents)
+    faults.point("finalize")
+    write_generation(root, provenance, summary.episodes, failed, seconds)
+    partial.publish()
+    return summary
+
+
+def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, progress: bool) -> int:
+    """Produce every episode not yet in the partial run; returns the failed oracle attempts."""
+    from tqdm import tqdm
+
+    from gen.produce import DemoFailed
+    from gen.workers import Job, WorkerCrash, produce
+
+    job = Job(cfg.referent, cfg.spec, cfg.spec_overrides(), planned.sim, cfg.codec, cfg.seed, cfg.max_attempts)
+    bar = tqdm(
+        total=len(planned.designs), initial=done, desc=planned.referent.name, unit="ep", disable=not progress, dynamic_ncols=True
+    )
+    failed = 0
+    try:
+        for index, produced in enumerate(produce(job, planned.designs, cfg.workers or 1, cfg.backend, start=done), start=done):
+            faults.point(f"episode:{index}")
+            partial.save(index, produced)
+            failed += len(produced.failures)
+            bar.update()
+            bar.set_postfix(retries=failed)
+    except DemoFailed as exc:
+        raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
+    except WorkerCrash as exc:
+        raise UserError(str(exc)) from None
+    finally:
+        bar.close()
+    return failed
+
+
+def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) -> tuple[list[dict], int, list[EpisodeSpec]]:
+    """The LeRobot files, from the episode files, in order."""
+    from gen.lerobot_writer import Layout, LeRobotWriter
+
+    sim = planned.sim
+    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, NATIVE.state_names, NATIVE.action_names, cfg.codec))
+    rows, written = [], []
+    for produced in partial.episodes(cfg.n):
+        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
+        written.append(produced.spec)
+        faults.point(f"assemble:{len(rows) - 1}")
+    writer.finalize()
+    return rows, writer.frames, written

@@ -1,0 +1,105 @@
+"""What made a product, recorded once: every place that states it is rendered from here.
+
+`meta/generation.json`, the card's provenance table, the `python -m gen ...` line that
+regenerates a dataset, the matching exam's command and the options a resumed run must match
+all come from one `Provenance`, so they cannot disagree.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+from importlib import metadata
+from pathlib import Path
+
+from core import __version__
+from gen.config import GenConfig
+from referents import Referent
+
+# The options that determine a product's bytes (beside the referent spec's overrides).
+DETERMINING = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attempts", "spec", "objects_per_scene", "plan_only")
+# Options a command line spells as a list.
+LIST_OPTIONS = ("holdout", "distractor_only", "targets")
+# What the exam of a dataset does not inherit from it: its size, random stream and confounds.
+NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only")
+
+
+def run_record(cfg: GenConfig) -> dict:
+    """The options that determine a product's bytes: a resumed run must match them."""
+    record = {k: getattr(cfg, k) for k in DETERMINING} | cfg.spec_overrides() | {"generator_version": __version__}
+    if cfg.spec:
+        record["spec_text"] = Path(cfg.spec).read_text()
+    return record
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """The generator's options, the resolved referent spec, and the software that ran."""
+
+    config: GenConfig
+    referent_spec: dict
+    versions: dict = field(
+        default_factory=lambda: {
+            "generator_version": __version__,
+            "mujoco": metadata.version("mujoco"),
+            "robosuite": metadata.version("robosuite"),
+            "python": platform.python_version(),
+        }
+    )
+
+    @classmethod
+    def of(cls, cfg: GenConfig, referent: Referent) -> Provenance:
+        return cls(cfg, asdict(referent.config))
+
+    @cached_property
+    def spec_hash(self) -> str:
+        """Content hash of the resolved referent spec."""
+        return hashlib.sha256(json.dumps(self.referent_spec, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+    def command(self) -> str:
+        """The `python -m gen ...` line that regenerates this product."""
+        cfg = self.config
+        parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
+        for name in ("codec", "spec", "objects_per_scene", "confound", "split"):
+            value = getattr(cfg, name)
+            if value is not None and value != GenConfig.__dataclass_fields__[name].default:
+                parts.append(f"{name}={value}")
+        for name in LIST_OPTIONS:
+            if getattr(cfg, name):
+                parts.append(f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'")
+        if cfg.plan_only:
+            parts.append("plan_only=true")
+        return "python -m gen " + " ".join(parts)
+
+    def exam_command(self) -> str:
+        """The held-out exam for a dataset: same referent and options, exam split, another seed."""
+        kept = [p for p in self.command().split(" ") if p.split("=")[0].lstrip("'") not in NOT_INHERITED_BY_EXAM]
+        return " ".join([*kept, "n=200", f"seed={self.config.seed + 1}", "split=exam"])
+
+    def table(self) -> str:
+        """The card's provenance rows (markdown)."""
+        v = self.versions
+        return (
+            f"| generator | deconfound {v['generator_version']} |\n| referent spec hash | `{self.spec_hash}` |\n"
+            f"| seed | {self.config.seed} |\n| simulator | mujoco {v['mujoco']}, robosuite {v['robosuite']} |"
+        )
+
+    def generation(self, episodes: int, failed_attempts: int, seconds: float) -> dict:
+        """`meta/generation.json`: what regenerates the product, and that it is complete."""
+        v = self.versions
+        return {
+            "generator": "deconfound",
+            **v,
+            "config": asdict(self.config),
+            "referent_spec": self.referent_spec,
+            "plan_only": self.config.plan_only,
+            "run": run_record(self.config),
+            "complete": True,
+            "referent_spec_hash": self.spec_hash,
+            "episodes": episodes,
+            "failed_attempts": failed_attempts,
+            "seconds": round(seconds, 2),
+        }

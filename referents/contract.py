@@ -1,0 +1,129 @@
+"""The referent type contract: what a type's module (`<type>.py`, beside its `<type>.yaml`) may
+define, and the default of every name but `design`.
+
+The module's public names must all be contract names (helpers are private: `_name`); any other
+one, such as a misspelt `alternative`, is refused at load with one line naming it, so nothing
+silently falls back to a default.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import hashlib
+import importlib
+import importlib.util
+import sys
+from collections import Counter
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, fields
+from pathlib import Path
+from types import ModuleType
+
+from core import catalog
+from core.demo import Plan, Skills
+from core.spec import EpisodeSpec
+from referents.balance import Balance
+from referents.design import Design
+from referents.features import Alternative, object_alternatives
+from referents.schema import CONFOUNDS, ReferentConfig, ReferentSpecError
+
+
+def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.target)
+    skills.lift()
+
+
+def _the_target(spec: EpisodeSpec) -> str:
+    return spec.target
+
+
+def _accept(cfg: ReferentConfig) -> None:
+    """No checks beyond the schema's."""
+
+
+@dataclass(frozen=True)
+class TypeModule:
+    """A referent type's code: the contract's names as its module defines them, defaults filled in."""
+
+    design: Callable[[ReferentConfig, Balance], Design]  # the balanced discrete choices of one episode
+    demo: Plan = pick_and_lift  # the oracle's plan
+    alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives  # the audit's choices
+    answer: Callable[[EpisodeSpec], str] = _the_target  # the id of the right alternative
+    assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
+    validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
+    CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
+
+    def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:
+        """The bodies every scene compiles, checked now rather than when a scene is first built:
+        catalog kinds, positive counts, and a body for every kind the spec's objects use."""
+        where = f"(assets() of referent type {cfg.type})"
+        try:
+            pairs = [tuple(entry) for entry in self.assets(cfg)]
+        except TypeError:
+            raise cfg.fail("assets", f"must be (kind, count) pairs {where}") from None
+        for pair in pairs:
+            if len(pair) != 2 or not isinstance(pair[1], int) or pair[1] < 1:
+                raise cfg.fail("assets", f"{pair!r} is not a (kind, count >= 1) pair {where}")
+            if not isinstance(pair[0], str) or pair[0] not in catalog.KINDS:
+                raise cfg.fail("assets", f"unknown kind {pair[0]!r} {where}; known: {', '.join(sorted(catalog.KINDS))}")
+        inventory = tuple(sorted(pairs))  # type: ignore[arg-type]
+        twice = [kind for kind, n in Counter(kind for kind, _ in inventory).items() if n > 1]
+        if twice:
+            raise cfg.fail("assets", f"kind {twice[0]!r} is listed twice {where}")
+        missing = sorted({c.kind for c in cfg.objects} - {kind for kind, _ in inventory})
+        if missing:
+            raise cfg.fail("objects", f"kind {missing[0]!r} has no body in the scene's inventory {where}")
+        return inventory
+
+
+CONTRACT = tuple(f.name for f in fields(TypeModule))
+
+
+@functools.cache
+def code_of(path: Path) -> TypeModule:
+    """The checked code of the type module at `path` (a built-in type's, or one beside its spec)."""
+    built_in = path.parent.resolve() == Path(__file__).resolve().parent
+    module = importlib.import_module(f"referents.{path.stem}") if built_in else _import_file(path)
+    for name in _defined(path):
+        if not name.startswith("_") and name not in CONTRACT:
+            raise ReferentSpecError(
+                f"{path}: {name}: not part of the referent type contract ({', '.join(CONTRACT)}); a helper's name starts with _"
+            )
+    if not hasattr(module, "design"):
+        raise ReferentSpecError(f"{path}: design: missing; every referent type defines design(config, balance) -> Design")
+    found = {name: getattr(module, name) for name in CONTRACT if hasattr(module, name)}
+    for name, value in found.items():
+        if name != "CONFOUNDS" and not callable(value):
+            raise ReferentSpecError(f"{path}: {name}: must be a function, got {value!r}")
+    confounds = found.get("CONFOUNDS", ())
+    if not isinstance(confounds, tuple) or not set(confounds) <= set(CONFOUNDS):
+        raise ReferentSpecError(f"{path}: CONFOUNDS: must be a tuple of {', '.join(CONFOUNDS)}, got {confounds!r}")
+    return TypeModule(**found)
+
+
+def _defined(path: Path) -> list[str]:
+    """The names a module's top-level statements define (what it imports is not its own)."""
+    names = []
+    for node in ast.parse(path.read_text(), str(path)).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.append(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names += [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)]
+    return names
+
+
+def _import_file(path: Path) -> ModuleType:
+    """A type module from outside the package, under a name unique to its file."""
+    name = f"_referent_{path.stem}_{hashlib.sha256(str(path).encode()).hexdigest()[:8]}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # dataclasses defined in it look their module up here
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # the type's own code: any failure is reported in one line
+        del sys.modules[name]
+        raise ReferentSpecError(f"{path}: cannot import: {type(exc).__name__}: {exc}") from None
+    return module
