@@ -1,6 +1,6 @@
 """Battery throughput: rollouts per minute for the reference policies.
 
-    python bench/eval.py [trials=40] [referent=object] ['policies=[oracle,random]'] ['workers=[1,2]']
+    python bench/eval.py [trials=40] [referent=object] [profile=native] ['policies=[oracle,random]'] ['workers=[1,2]']
 
 Builds an exam (trials x (task + swaps + occ + nonsense) rollouts), takes it with each policy
 at each worker count, and prints rollouts/min. Reference policies read no cameras, so this is
@@ -31,6 +31,7 @@ from gen.run import generate
 class BenchOptions:
     trials: int = 40  # exam trials (each one task + swaps + occ + nonsense rollouts)
     referent: str = "object"  # a referent type (referents/<type>.yaml)
+    profile: str = "native"  # the exam's feature layout: native | libero
     policies: list[str] = field(default_factory=lambda: ["oracle", "random"])  # policies to time (see eval/policies.py)
     workers: list[int] = field(default_factory=lambda: [1, 2])  # worker counts to time each policy at
 
@@ -44,10 +45,14 @@ def bench(options: BenchOptions) -> None:
         raise UserError(str(exc)) from None
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp) / "exam"
-        generate(parse([f"referent={options.referent}", f"n={options.trials}", "split=exam", f"out={root}"]), progress=False)
+        argv = [f"referent={options.referent}", f"n={options.trials}", "split=exam", f"out={root}", f"profile={options.profile}"]
+        generate(parse(argv), progress=False)
         exam = read(root)
-        print(f"{options.referent} exam: {options.trials} trials, {len(exam.trials)} rollouts")
-        print(f"{'policy':<10}{'workers':>8}{'seconds':>9}{'rollouts/min':>14}{'task':>7}{'obeyed':>8}")
+        print(f"{options.referent} exam ({options.profile}): {options.trials} trials, {len(exam.trials)} rollouts")
+        print(
+            f"{'policy':<10}{'workers':>8}{'seconds':>9}{'rollouts/min':>14}{'task':>7}{'obeyed':>8}"
+            f"{'95% CI':>10}{'chance':>8}{'max face':>10}"
+        )
         for name, policy in policies.items():
             for workers in options.workers:
                 report, seconds = take(exam, exam.trials, policy, Path(tmp) / f"{name}-{workers}", workers, name)
@@ -55,6 +60,8 @@ def bench(options: BenchOptions) -> None:
                 print(
                     f"{name:<10}{workers:>8}{seconds:>9.1f}{60 * len(exam.trials) / seconds:>14.1f}"
                     f"{f['task']['rate']:>7.0%}{f['obeyed_name']['rate']:>8.0%}"
+                    f"{'{:.0%}-{:.0%}'.format(*f['obeyed_name']['ci']):>10}{f['obeyed_name']['chance']:>8.0%}"
+                    f"{max(face['rate'] for face in f.values()):>10.0%}"
                 )
 
 

@@ -1,11 +1,22 @@
-"""Rates with their evidence: k of n, and a Wilson 95% interval (used by the audit and battery)."""
+"""Rates with their evidence: k of n, a Wilson 95% interval (used by the audit and battery), and a
+cluster bootstrap interval for rollouts that share a scene.
+
+Wilson treats every rollout as independent; an exam's swaps of one trial share its scene, so
+their outcomes are correlated and Wilson is too narrow. `cluster_ci` resamples whole trials
+(clusters) with replacement and takes the percentile interval of the pooled rate.
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 Z95 = 1.959963984540054
+BOOTSTRAP_RESAMPLES = 2000
+BOOTSTRAP_SEED = 0  # fixed: the same outcomes always give the same interval
 
 
 def wilson(k: float, n: int, z: float = Z95) -> tuple[float, float]:
@@ -40,3 +51,17 @@ class Rate:
         lo, hi = self.ci
         k = f"{self.k:g}" if not float(self.k).is_integer() else str(int(self.k))
         return f"{self.rate:.1%} ({k}/{self.n}, 95% CI {lo:.1%}–{hi:.1%})" if self.n else "— (n=0)"
+
+
+def cluster_ci(outcomes: Sequence[float], clusters: Sequence[int], resamples: int = BOOTSTRAP_RESAMPLES) -> tuple[float, float]:
+    """95% percentile interval of the pooled rate when whole clusters (trials) are resampled."""
+    if not len(outcomes):
+        return (0.0, 1.0)
+    ids, index = np.unique(np.asarray(clusters), return_inverse=True)
+    hits = np.bincount(index, weights=np.asarray(outcomes, float), minlength=len(ids))
+    sizes = np.bincount(index, minlength=len(ids)).astype(float)
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    draws = rng.integers(0, len(ids), size=(resamples, len(ids)))
+    rates = hits[draws].sum(axis=1) / sizes[draws].sum(axis=1)
+    lo, hi = np.percentile(rates, [2.5, 97.5])
+    return (round(float(lo), 4), round(float(hi), 4))

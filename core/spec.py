@@ -13,7 +13,7 @@ import json
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from core.layout import NATIVE
+from core.layout import NATIVE, FeatureLayout, layout
 
 SPEC_VERSION = 1
 
@@ -74,6 +74,14 @@ class SimSettings:
     fps: int = 20
     cameras: tuple[str, ...] = NATIVE.camera_names
     robot_home: tuple[float, ...] = PANDA_HOME
+    profile: str = NATIVE.name  # the feature layout: cameras, state, action and controller (core/layout.py)
+
+    def __post_init__(self) -> None:
+        layout(self.profile)  # an unknown profile fails here, naming the known ones
+
+    @property
+    def layout(self) -> FeatureLayout:
+        return layout(self.profile)
 
 
 @dataclass(frozen=True)
@@ -115,7 +123,10 @@ class EpisodeSpec:
         raise KeyError(f"no object {object_id!r} in episode {self.index}")
 
     def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        d = asdict(self)
+        if self.sim.profile == NATIVE.name:  # specs of the native profile keep the JSON (and hash) they always had
+            del d["sim"]["profile"]
+        return d
 
     def to_json(self) -> str:
         """Canonical JSON: sorted keys, no whitespace, so equal specs give equal strings."""
@@ -177,6 +188,7 @@ class EpisodeSpec:
                     fps=int(d["sim"]["fps"]),
                     cameras=tuple(d["sim"]["cameras"]),
                     robot_home=tuple(float(v) for v in d["sim"]["robot_home"]),
+                    profile=str(d["sim"].get("profile", NATIVE.name)),
                 ),
                 attempt=int(d["attempt"]),
                 split=str(d.get("split", "train")),

@@ -29,6 +29,7 @@ class EvalOptions:
     out: str | None = None  # report folder; default runs/<exam folder>/<policy>
     rows: int | None = None  # take only the first N rollouts; default all
     workers: int = 1  # processes running rollouts (the logs are the same either way)
+    keys: str = "dataset"  # remote policies: dataset (the exam's keys) | libero (what openpi's LIBERO client sends)
 
 
 def evaluate(options: EvalOptions) -> None:
@@ -37,16 +38,23 @@ def evaluate(options: EvalOptions) -> None:
     if options.rows is not None and options.rows < 1:
         raise UserError(f"rows must be at least 1, got {options.rows}")
     from eval.battery import take  # the simulator stack loads only for valid input
+    from eval.rollout import ProfileMismatch
 
+    policy_options = {} if options.keys == "dataset" else {"keys": options.keys}
     try:
         exam = read(options.exam)
-        policy = make(options.policy)
+        profile = exam.meta.get("profile", "native")
+        if options.keys == "libero" and profile != "libero":
+            raise UserError(f"keys=libero sends LIBERO's features; this exam is profile {profile} (make it with profile=libero)")
+        policy = make(options.policy, **policy_options)
     except (ExamError, PolicyError) as exc:
         raise UserError(str(exc)) from None
     rows = exam.trials if options.rows is None else exam.trials.head(options.rows)
     out = Path(options.out or Path("runs") / exam.root.name / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
     try:
-        report, seconds = take(exam, rows, policy, out, workers=options.workers, policy_name=options.policy)
+        report, seconds = take(exam, rows, policy, out, options.workers, options.policy, policy_options=policy_options)
+    except ProfileMismatch as exc:
+        raise UserError(str(exc)) from None
     except OSError as exc:
         raise Failed(f"{type(exc).__name__}: {exc}") from None
     faces = report["faces"]

@@ -7,7 +7,9 @@
 
 Each environment is one row of the exam (`row=` or `trial=`/`face=`/`variant=`): the trial's
 scene rebuilt at its recorded initial state, with its cameras (blank on the occ face). The
-observation has the dataset's keys; the action is the dataset's (7 joint targets + gripper).
+observation has the dataset's keys; the action is the dataset's, in the exam's profile (native:
+7 joint targets + gripper; libero: a 7-d end-effector delta through OSC_POSE, and reset first
+runs the settle steps lerobot's LIBERO environment runs).
 `reward` is 1.0 while the asked-for program is achieved; the episode truncates at the row's
 horizon. `info` carries the end-effector and object positions the offline scorer takes
 (`python -m eval.score`).
@@ -23,7 +25,7 @@ from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import Exam, read
-from core.layout import NATIVE, STATE_KEY
+from core.layout import STATE_KEY
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
 from eval.rollout import check_action, observe
@@ -55,14 +57,15 @@ class ExamEnv(gym.Env):
         self.episode = EpisodeSpec.from_json(self.row["spec"])
         self.render_mode = render_mode
         size = self.episode.sim.image_size
+        self.features = features = self.episode.sim.layout
         self.observation_space = spaces.Dict(
             {
-                **{NATIVE.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
-                STATE_KEY: spaces.Box(-np.inf, np.inf, (NATIVE.state_size,), np.float32),
+                **{features.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
+                STATE_KEY: spaces.Box(-np.inf, np.inf, (features.state_size,), np.float32),
             }
         )
-        self.action_space = spaces.Box(np.array(NATIVE.action_low, np.float32), np.array(NATIVE.action_high, np.float32))
-        self.scene = scene_for(self.episode.assets)
+        self.action_space = spaces.Box(np.array(features.action_low, np.float32), np.array(features.action_high, np.float32))
+        self.scene = scene_for(self.episode.assets, self.episode.sim.profile)
         self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
         self._t = 0
         self._start: dict = {}
@@ -88,12 +91,14 @@ class ExamEnv(gym.Env):
         super().reset(seed=seed)
         self.scene.reset(self.episode)
         self.scene.set_physics_state(np.asarray(self.row["initial_state"]))
-        self._t = 0
         self._start = self.scene.positions()
+        for _ in range(self.features.settle_steps):
+            self.scene.step(self.features.hold_action(self.episode.sim.robot_home))
+        self._t = 0
         return self._obs(), self._info()
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
-        valid, problem = check_action(action)
+        valid, problem = check_action(action, self.features)
         if problem:
             raise ValueError(problem)
         self.scene.step(valid)

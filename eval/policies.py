@@ -26,7 +26,7 @@ from typing import Protocol
 import numpy as np
 
 import referents
-from core.layout import ARM_JOINTS, JOINT_HIGH, JOINT_LOW
+from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec, TaskSpec
 
 
@@ -71,9 +71,11 @@ class Scripted:
         from oracle.ik import ArmIK
         from oracle.scene import Scene
 
-        if spec.assets not in self._planner:  # a private scene: the runner's stays untouched
-            self._planner[spec.assets] = (Scene(spec.assets), ArmIK(np.asarray(spec.sim.robot_home)))
-        scene, ik = self._planner[spec.assets]
+        # a private scene: the runner's stays untouched
+        key = (spec.assets, spec.sim.profile)
+        if key not in self._planner:
+            self._planner[key] = (Scene(spec.assets, spec.sim.profile), ArmIK(np.asarray(spec.sim.robot_home)))
+        scene, ik = self._planner[key]
         return list(demonstrate(scene, ik, spec, demo).actions)
 
     def act(self, observation: dict) -> np.ndarray | None:
@@ -112,25 +114,30 @@ class Nothing:
     needs_images = False
 
     def reset(self, context: Context) -> None:
-        self._hold = np.array([*context.spec.sim.robot_home, -1.0], np.float32)
+        self._hold = context.spec.sim.layout.hold_action(context.spec.sim.robot_home)
 
     def act(self, observation: dict) -> np.ndarray:
         return self._hold
 
 
 class Random:
-    """Joint targets wander from home by a seeded random walk; the gripper toggles at random."""
+    """Joint targets (or, under end-effector deltas, small random deltas) wander by a seeded
+    random walk; the gripper toggles at random."""
 
     name = "random"
     needs_images = False
 
     def reset(self, context: Context) -> None:
         self._rng = np.random.default_rng(context.seed)
+        self._deltas = context.spec.sim.layout.controller != NATIVE.controller
         self._q = np.asarray(context.spec.sim.robot_home, float).copy()
-        self._gripper = -1.0
+        self._gripper = GRIPPER_OPEN
 
     def act(self, observation: dict) -> np.ndarray:
-        self._q = np.clip(self._q + self._rng.normal(0.0, 0.05, ARM_JOINTS), JOINT_LOW, JOINT_HIGH)
+        if self._deltas:
+            arm = np.clip(self._rng.normal(0.0, 0.3, 6), -1.0, 1.0)
+        else:
+            arm = self._q = np.clip(self._q + self._rng.normal(0.0, 0.05, ARM_JOINTS), JOINT_LOW, JOINT_HIGH)
         if self._rng.random() < 0.05:
             self._gripper = -self._gripper
-        return np.array([*self._q, self._gripper], np.float32)
+        return np.array([*arm, self._gripper], np.float32)

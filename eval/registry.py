@@ -61,8 +61,9 @@ def names() -> list[str]:
     return listed
 
 
-def make(name: str) -> Policy:
-    """The policy `name` names, or PolicyError saying why not (one line)."""
+def make(name: str, **options: object) -> Policy:
+    """The policy `name` names, or PolicyError saying why not (one line); `options` go to its
+    factory (e.g. `keys=` for remote policies)."""
     key, sep, arg = name.partition(":")
     factory = _factory(key)
     if factory is None:
@@ -72,7 +73,12 @@ def make(name: str) -> Policy:
         raise PolicyError(f"policy {key} needs an argument: {key}:{argument}")
     if sep and not argument:
         raise PolicyError(f"policy {key} takes no argument: write {key}, not {name!r}")
-    return factory(arg) if argument else factory()
+    try:
+        return factory(arg, **options) if argument else factory(**options)
+    except TypeError as exc:
+        if options:  # a factory that takes no such option
+            raise PolicyError(f"policy {key} takes no option {', '.join(options)}: {exc}") from None
+        raise
 
 
 register("oracle", Oracle)

@@ -1,10 +1,16 @@
 """A policy served over the openpi websocket protocol (`openpi-client`), so any served VLA can
 take the exam.
 
-Each query sends the observation dict (the dataset's keys, images as H x W x 3 uint8) plus
-`prompt` (the instruction) and expects `{"actions": array (H, 8)}`; the first `replan` actions
-of each chunk are executed before the next query. Adapt key names in the server's input
-transform (openpi's LIBERO example uses the same pattern).
+`keys=dataset` (default): each query sends the observation dict (the dataset's keys, images as
+H x W x 3 uint8) plus `prompt` (the instruction) and expects `{"actions": array (H, A)}`; the
+first `replan` actions of each chunk are executed before the next query.
+
+`keys=libero` (a `profile=libero` exam): each query is what openpi's own LIBERO example client
+(examples/libero/main.py) sends — `observation/image` and `observation/wrist_image` (the
+frames as LIBERO's datasets hold them, resized with padding to 224 px, uint8),
+`observation/state` (the 8-d state, float64 as robosuite reports it) and `prompt` — and the
+first 5 actions of each returned chunk are executed, as that client does; so an unmodified
+`serve_policy.py --env LIBERO` server can take the exam.
 """
 
 from __future__ import annotations
@@ -13,19 +19,40 @@ import socket
 
 import numpy as np
 
+from core.layout import LIBERO, STATE_KEY, TASK_KEY
 from eval.policies import Context, PolicyError
+
+KEYS = ("dataset", "libero")
+LIBERO_CLIENT_SIZE, LIBERO_REPLAN = 224, 5  # openpi's examples/libero/main.py: resize_size, replan_steps
+
+
+def libero_request(observation: dict) -> dict:
+    """An observation of a libero-profile exam as openpi's LIBERO example client sends it."""
+    from openpi_client import image_tools
+
+    front, wrist = (observation[LIBERO.image_key(c)] for c in LIBERO.camera_names)
+    size = LIBERO_CLIENT_SIZE
+    return {
+        "observation/image": image_tools.convert_to_uint8(image_tools.resize_with_pad(front, size, size)),
+        "observation/wrist_image": image_tools.convert_to_uint8(image_tools.resize_with_pad(wrist, size, size)),
+        "observation/state": np.asarray(observation[STATE_KEY], np.float64),
+        "prompt": str(observation[TASK_KEY]),
+    }
 
 
 class RemotePolicy:
     argument = "HOST:PORT"  # written remote:HOST:PORT (eval/registry.py)
     needs_images = True
 
-    def __init__(self, address: str, replan: int = 5, timeout: float = 5.0) -> None:
+    def __init__(self, address: str, keys: str = "dataset", replan: int = 5, timeout: float = 5.0) -> None:
         host, _, port = address.rpartition(":")
         if not host or not port.isdigit():
             raise PolicyError(f"remote policy address must be HOST:PORT, got {address!r}")
+        if keys not in KEYS:
+            raise PolicyError(f"keys must be one of {', '.join(KEYS)}, got {keys!r}")
         self.name = f"remote:{address}"
-        self.replan = replan
+        self.keys = keys
+        self.replan = LIBERO_REPLAN if keys == "libero" else replan
         try:
             socket.create_connection((host, int(port)), timeout=timeout).close()
         except OSError as exc:
@@ -44,8 +71,11 @@ class RemotePolicy:
 
     def act(self, observation: dict) -> np.ndarray:
         if not self._queue:
-            obs = {k: v for k, v in observation.items() if k != "task"}
-            obs["prompt"] = observation["task"]
+            if self.keys == "libero":
+                obs = libero_request(observation)
+            else:
+                obs = {k: v for k, v in observation.items() if k != TASK_KEY}
+                obs["prompt"] = observation[TASK_KEY]
             chunk = np.asarray(self._client.infer(obs)["actions"], dtype=np.float32)
             chunk = chunk.reshape(-1, chunk.shape[-1]) if chunk.ndim > 1 else chunk[None]
             self._queue = list(chunk[: self.replan])

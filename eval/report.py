@@ -18,8 +18,20 @@ import numpy as np  # noqa: E402
 FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense")
 
 
+LEVELS = ("5cm", "2cm", "achieved")
+
+
 def _pct(r: dict) -> str:
     return f"{r['rate']:.1%} ({r['k']}/{r['n']}, CI {r['ci'][0]:.1%}–{r['ci'][1]:.1%})" if r["n"] else "— (n=0)"
+
+
+def _trials_ci(r: dict) -> str:
+    lo, hi = r.get("ci_trials", (None, None))
+    return f"{lo:.1%}–{hi:.1%}" if lo is not None and r["n"] else "—"
+
+
+def _short(r: dict | None) -> str:
+    return f"{r['rate']:.1%} ({r['k']}/{r['n']})" if r and r["n"] else "—"
 
 
 def markdown(report: dict) -> str:
@@ -34,10 +46,29 @@ def markdown(report: dict) -> str:
             else f"**Init-value check FAILED** ({report['init_value']['faces']}): do not trust these rates."
         ),
         "",
-        "| face | rate (k/n, 95% Wilson CI) | chance |",
-        "|---|---|---|",
+        "| face | rate (k/n, 95% Wilson CI) | 95% CI, trials resampled | chance | shortcut (`position`) |",
+        "|---|---|---|---|---|",
     ]
-    lines += [f"| {f} | {_pct(faces[f])} | {faces[f]['chance']:.0%} |" for f in FACE_ORDER if f in faces]
+    baseline = report.get("baseline") or {}
+    lines += [
+        f"| {f} | {_pct(faces[f])} | {_trials_ci(faces[f])} | {faces[f]['chance']:.0%} | {_short(baseline.get(f))} |"
+        for f in FACE_ORDER
+        if f in faces
+    ]
+    if "grounding" in report:
+        g = report["grounding"]
+        lines.append(
+            f"| grounding (first-frame guess nearest the named object) | {_pct(g)} | {_trials_ci(g)} | {g['chance']:.0%} | — |"
+        )
+    lines += ["", "Each face at three levels: landed within 5 cm, within 2 cm, achieved the program.", ""]
+    lines += ["| face | " + " | ".join(LEVELS) + " |", "|---|" + "---|" * len(LEVELS)]
+    lines += [
+        f"| {f} | "
+        + " | ".join(f"{_short(faces[f]['by_level'][lv])} [{_trials_ci(faces[f]['by_level'][lv])}]" for lv in LEVELS)
+        + " |"
+        for f in FACE_ORDER
+        if f in faces and "by_level" in faces[f]
+    ]
     d = report["distances"]
     if d["n"]:
         lines += [
@@ -100,7 +131,8 @@ def plots(report: dict) -> list[str]:
     slots = list(report["per_slot"])
     if slots:
         cols = ["task", "obeyed_name"]
-        grid = np.array([[report["per_slot"][s].get(c, {}).get("rate") or np.nan for c in cols] for s in slots], float)
+        rates = [[report["per_slot"][s].get(c, {}).get("rate") for c in cols] for s in slots]
+        grid = np.array([[np.nan if r is None else r for r in row] for row in rates], float)  # 0% is a rate, not a gap
         fig, ax = plt.subplots(figsize=(3.6, 0.35 * len(slots) + 1.2))
         im = ax.imshow(grid, cmap="viridis", vmin=0, vmax=1, aspect="auto")
         ax.set_xticks(range(len(cols)), cols)
@@ -125,13 +157,23 @@ def plots(report: dict) -> list[str]:
     return images
 
 
+STYLE = (
+    "body{font-family:sans-serif;max-width:960px;margin:2em auto;line-height:1.4}"
+    "table{border-collapse:collapse;margin:0.6em 0}th,td{border:1px solid #ccc;padding:0.25em 0.6em;text-align:left}"
+    "th{background:#f0f3f7}tr:nth-child(even) td{background:#fafafa}"
+)
+
+
 def html(report: dict) -> str:
+    """The Markdown report rendered (tables as tables), with the plots after its summary table."""
+    from markdown_it import MarkdownIt
+
     body = "".join(f'<p><img src="data:image/png;base64,{img}"></p>' for img in plots(report))
-    rows = markdown(report)
+    rendered = MarkdownIt("commonmark", {"html": False}).enable("table").render(markdown(report))
+    head, _, rest = rendered.partition("</table>")
     return (
-        "<!doctype html><html><head><meta charset='utf-8'><title>battery report</title>"
-        "<style>body{font-family:sans-serif;max-width:900px;margin:2em auto}pre{white-space:pre-wrap}</style></head><body>"
-        f"<h1>{report['policy']} on {report['exam']}</h1>{body}<pre>{rows}</pre></body></html>"
+        f"<!doctype html><html><head><meta charset='utf-8'><title>battery report</title><style>{STYLE}</style></head>"
+        f"<body>{head}</table>{body}{rest}</body></html>"
     )
 
 

@@ -11,18 +11,30 @@ approach of the end effector to the alternative's contact point. The rollout *la
 alternative it achieved, or else on the one it came closest to if that is within the landing
 threshold (5 cm; ties land nowhere).
 
-report.json schema (version 1):
+report.json schema (version 2):
   policy, exam, referent, rollouts, trials
-  faces.<face> = {k, n, rate, ci: [lo, hi], chance} for task (achieved the ask), obeyed_name
-      (swap: landed on the newly named alternative), true_target (swap: landed on the original),
-      occ and nonsense (achieved the original ask), swap_success (swap: achieved the new ask)
+  faces.<face> = {k, n, rate, ci: [lo, hi], ci_trials: [lo, hi], chance, by_level} for task
+      (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
+      (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
+      (swap: achieved the new ask). `ci` is Wilson's (every rollout independent); `ci_trials`
+      resamples whole trials, whose rollouts share a scene (core/rates.py). `by_level` =
+      {"5cm", "2cm", "achieved": {k, n, rate, ci, ci_trials}}: the same face judged as landing
+      within 5 cm, within 2 cm, or achieving the program (lifted / pushed / placed) on what the
+      face counts (the ask; for true_target the original). The headline is the 5 cm level for
+      obeyed_name and true_target and the achieved level for the others.
+  baseline = the faces of the `position` reference policy (the measured shortcut) on the same
+      exam, when known (python -m eval runs it once per exam and caches it)
+  grounding = {k, n, rate, ci, ci_trials, chance} for policies that predict where the named
+      object is (a `located` column in the logs): swap rollouts whose first-frame prediction is
+      nearest the newly named object, whatever the arm then did
   init_value = {faces: {face: rate}, trusted}: the same scoring on every rollout's initial
       state (a do-nothing policy); rates are trusted only when all are 0
   reach_probe.<face> = {reached_target, went_distractor, neither}: every failed rollout
   distances = {n, median_to_named, median_to_original, grazing (closest approach to either in
       (2, 5] cm), by_threshold: {"0.02": {obeyed_name, true_target}, "0.05": {...}},
       threshold_robust (the verdict against chance is the same at both thresholds),
-      to_named, to_original (each swap rollout's closest approach, metres)}
+      to_named, to_original (each swap rollout's closest approach, metres),
+      histogram: {edges, to_named, to_original} (counts per distance bin)}
   per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value)
   errors = [{row, error}] for rollouts that broke (they count as failures)
 """
@@ -32,6 +44,7 @@ from __future__ import annotations
 import json
 import sys
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,12 +54,14 @@ import pyarrow.parquet as pq
 
 from core import catalog, contact
 from core.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
-from core.rates import Rate
+from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
+from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline
 from gen.cli import UserError, main
 
-REPORT_VERSION = 1
+LEVELS = {"5cm": 0.05, "2cm": 0.02, "achieved": None}  # landing threshold (m), or None: the program achieved
+HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 POLICY_KEY = b"deconfound.policy"
 
 
@@ -93,33 +108,53 @@ def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
     return ranked[0]
 
 
-def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[str, np.ndarray], str | None]]:
+START_TOLERANCE = 0.002  # m: how far a logged step-0 object may sit from where its trial starts
+
+
+def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[str, np.ndarray], str | None, np.ndarray | None]]:
     missing = set(exam.trials["row"]) - set(logs["row"])
     if missing:
         raise LogError(f"the logs lack {len(missing)} of the exam's {len(exam.trials)} rollouts (e.g. row {min(missing)})")
+    twice = logs["row"][logs["row"].duplicated()]
+    if len(twice):
+        raise LogError(
+            f"the logs hold row {int(twice.iloc[0])} more than once ({len(twice)} duplicated rows): one log per rollout"
+        )
+    starts = {int(r["row"]): EpisodeSpec.from_json(r["spec"]) for _, r in exam.trials.iterrows()}
     parsed = {}
     for _, log in logs.iterrows():
         ee = np.asarray([np.asarray(p, float) for p in log["ee"]]).reshape(-1, 3)
         objects = {k: np.asarray(v, float).reshape(-1, 3) for k, v in json.loads(log["objects"]).items()}
         if not len(ee) or any(len(v) != len(ee) for v in objects.values()):
             raise LogError(f"row {log['row']}: every object needs one position per end-effector position")
-        parsed[int(log["row"])] = (ee, objects, log["error"] if isinstance(log["error"], str) else None)
+        spec = starts.get(int(log["row"]))
+        for o in spec.objects if spec else ():
+            off = float(np.linalg.norm(objects[o.id][0] - o.pos)) if o.id in objects else float("inf")
+            if off > START_TOLERANCE:
+                where = "missing" if off == float("inf") else f"{off * 100:.1f} cm from where it starts"
+                raise LogError(
+                    f"row {log['row']}: step 0 is not the trial's recorded initial state ({o.id} is {where}); "
+                    "log step 0 before any action"
+                )
+        error = log["error"] if isinstance(log["error"], str) else None
+        located = log.get("located")
+        guess = None if located is None or (np.ndim(located) == 0 and pd.isna(located)) else np.asarray(located, float)
+        parsed[int(log["row"])] = (ee, objects, error, guess)
     return parsed
 
 
 def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     parsed = _parse(logs, exam)
-    faces: dict[str, list[float]] = defaultdict(list)
-    init: dict[str, list[float]] = defaultdict(list)
-    chance: dict[str, list[float]] = defaultdict(list)
+    faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
     distances: list[tuple[float, float]] = []
     by_threshold: dict[float, dict[str, list[float]]] = {t: defaultdict(list) for t in REACH_THRESHOLDS}
     per_slot: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     per_object: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    grounding: list[tuple[float, int, float]] = []
     errors = []
     for _, row in exam.trials.iterrows():
-        ee, objects, error = parsed[int(row["row"])]
+        ee, objects, error, located = parsed[int(row["row"])]
         judged = judge(exam, row, ee, objects)
         at_start = judge(exam, row, ee, objects, steps=0)
         asked = (row["target"], row["program"])
@@ -128,50 +163,79 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             errors.append({"row": int(row["row"]), "error": error})
             for j in judged.values():
                 j["achieved"] = False
-        face = row["face"]
-        outcomes = {"task": [], "obeyed_name": [], "true_target": [], "occ": [], "nonsense": [], "swap_success": []}
+        trial, face, chance = int(row["trial"]), row["face"], 1.0 / len(judged)
+
+        def count(name: str, wanted: tuple[str, str], headline: str) -> bool:
+            """Record one rollout for face `name`: did it land on / achieve `wanted` at each level."""
+            levels = {
+                level: (judged[wanted]["achieved"] if t is None else (not error and landed(judged, t) == wanted))
+                for level, t in LEVELS.items()
+            }
+            init = at_start[wanted]["achieved"] if LEVELS[headline] is None else landed(at_start, LEVELS[headline]) == wanted
+            faces[name].append({"trial": trial, "ok": levels[headline], "init": init, "chance": chance, "levels": levels})
+            return levels[headline]
+
         if face == "swap":
-            land = None if error else landed(judged)
-            outcomes["obeyed_name"] = [land == asked, landed(at_start) == asked]
-            outcomes["true_target"] = [land == original, landed(at_start) == original]
-            outcomes["swap_success"] = [judged[asked]["achieved"], at_start[asked]["achieved"]]
+            ok = count("obeyed_name", asked, "5cm")
+            count("true_target", original, "5cm")
+            count("swap_success", asked, "achieved")
             distances.append((judged[asked]["distance"], judged[original]["distance"]))
             for t in REACH_THRESHOLDS:
                 land_t = None if error else landed(judged, t)
                 by_threshold[t]["obeyed_name"].append(land_t == asked)
                 by_threshold[t]["true_target"].append(land_t == original)
+            if located is not None:
+                nearest = _nearest(EpisodeSpec.from_json(row["spec"]), objects, located)
+                grounding.append((float(nearest == row["target"]), trial, chance))
         else:
-            outcomes[face] = [judged[asked]["achieved"], at_start[asked]["achieved"]]
-        for name, pair in outcomes.items():
-            if pair:
-                faces[name].append(float(pair[0]))
-                init[name].append(float(pair[1]))
-                chance[name].append(1.0 / len(judged))
-        ok = outcomes["obeyed_name"][0] if face == "swap" else outcomes[face][0]
+            ok = count(face, asked, "achieved")
         main = "obeyed_name" if face == "swap" else face
         if face in ("task", "swap"):
             per_slot[str(row["slot"])][main].append(float(ok))
             per_object[str(row["value"])][main].append(float(ok))
         if not ok:
             probe[main][_probe(judged, asked)] += 1
-    return {
+    report = {
         "version": REPORT_VERSION,
         "policy": policy,
         "exam": exam.name,
         "referent": exam.meta["referent"],
         "rollouts": len(exam.trials),
         "trials": int(exam.trials["trial"].nunique()),
-        "faces": {f: {**Rate(sum(v), len(v)).to_dict(), "chance": round(float(np.mean(chance[f])), 4)} for f, v in faces.items()},
+        "faces": {name: _face(entries) for name, entries in faces.items()},
         "init_value": {
-            "faces": {f: round(float(np.mean(v)), 4) for f, v in init.items()},
-            "trusted": all(sum(v) == 0 for v in init.values()),
+            "faces": {f: round(float(np.mean([e["init"] for e in v])), 4) for f, v in faces.items()},
+            "trusted": all(not any(e["init"] for e in v) for v in faces.values()),
         },
         "reach_probe": dict(probe),
-        "distances": _distances(distances, by_threshold, float(np.mean(chance["obeyed_name"] or [0.0]))),
+        "distances": _distances(distances, by_threshold, float(np.mean([e["chance"] for e in faces["obeyed_name"]] or [0.0]))),
         "per_slot": _rates(per_slot),
         "per_object": _rates(per_object),
         "errors": errors,
     }
+    if grounding:
+        hits, trials, chances = zip(*grounding)
+        report["grounding"] = {**_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
+    return report
+
+
+def _rate(outcomes: Sequence[float], trials: Sequence[int]) -> dict:
+    return {**Rate(float(sum(outcomes)), len(outcomes)).to_dict(), "ci_trials": list(cluster_ci(outcomes, trials))}
+
+
+def _face(entries: list[dict]) -> dict:
+    """A face's headline rate with both intervals, its chance and its three landing levels."""
+    trials = [e["trial"] for e in entries]
+    return {
+        **_rate([float(e["ok"]) for e in entries], trials),
+        "chance": round(float(np.mean([e["chance"] for e in entries])), 4),
+        "by_level": {level: _rate([float(e["levels"][level]) for e in entries], trials) for level in LEVELS},
+    }
+
+
+def _nearest(spec: EpisodeSpec, objects: dict[str, np.ndarray], point: np.ndarray) -> str:
+    """The scene object whose starting position is nearest `point`."""
+    return min((o.id for o in spec.objects), key=lambda i: float(np.linalg.norm(objects[i][0] - point)))
 
 
 def _probe(judged: dict, asked: tuple[str, str]) -> str:
@@ -200,6 +264,11 @@ def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: flo
         "threshold_robust": len(verdicts) == 1,
         "to_named": [round(float(v), 4) for v in named],
         "to_original": [round(float(v), 4) for v in original],
+        "histogram": {
+            "edges": [e if np.isfinite(e) else None for e in HISTOGRAM_EDGES],
+            "to_named": np.histogram(named, HISTOGRAM_EDGES)[0].tolist(),
+            "to_original": np.histogram(original, HISTOGRAM_EDGES)[0].tolist(),
+        },
     }
 
 
@@ -241,6 +310,9 @@ def run(options: ScoreOptions) -> None:
         report = score(exam, logs, options.policy or logged_policy or "unknown")
     except (ExamError, LogError) as exc:
         raise UserError(str(exc)) from None
+    baseline = report["faces"] if report["policy"] == SHORTCUT else cached_baseline(exam, list(exam.trials["row"]))
+    if baseline is not None:
+        report["baseline"] = baseline
     out = Path(options.out or Path(options.logs).parent)
     write_reports(out, report)
     print(f"wrote {out}/report.json, report.md, report.html")

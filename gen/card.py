@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
+from gen.preview import PREVIEW_PATH
 from gen.provenance import Provenance
 from referents import Referent
 
@@ -45,12 +46,26 @@ def audit_tables(report: dict) -> str:
     return "\n".join(lines)
 
 
-def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int) -> str:
-    keys = ", ".join(f"`{k}`" for k in (*NATIVE.image_keys, STATE_KEY, ACTION_KEY))
-    return (
+def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int, features: FeatureLayout) -> str:
+    keys = ", ".join(f"`{k}`" for k in (*features.image_keys, STATE_KEY, ACTION_KEY))
+    text = (
         f"{episodes} oracle-verified demonstrations ({frames} frames at {fps} Hz) of a Panda arm in "
         f"MuJoCo. Format: LeRobot v3.0 ({keys}). Oracle success before retries: "
         f"{episodes}/{episodes + failed_attempts}."
+    )
+    if features.name != NATIVE.name:
+        text += f"\n\n{profile_note(features, fps)}"
+    return text
+
+
+def profile_note(features: FeatureLayout, fps: int) -> str:
+    """What the features mean in a non-native profile, said where a fine-tuner looks first."""
+    cams = ", ".join(f"`{features.image_key(c)}` ({model})" for c, model in features.cameras.items())
+    mirrored = ", stored upright and mirrored left to right as in lerobot's LIBERO datasets" if features.mirrored else ""
+    return (
+        f"**Profile `{features.name}`**: recorded at **{fps} Hz** (control and video). Cameras {cams}{mirrored}. "
+        f"`{STATE_KEY}` ({features.state_size}): {', '.join(features.state_names)}. "
+        f"`{ACTION_KEY}` ({features.action_size}): {features.action_meaning}."
     )
 
 
@@ -59,8 +74,14 @@ def plan_contents(episodes: int) -> str:
 
 
 def write(root: Path, referent: Referent, provenance: Provenance, report: dict, contents: str) -> None:
-    """The card of a dataset or a plan; `contents` says which and how much."""
+    """The card of a dataset or a plan; `contents` says which and how much. A contact sheet
+    (`preview.png`) beside it is shown at the top."""
     rc = referent.config
+    sheet = (
+        f"\n![The first frame of the first episodes, with their instructions]({PREVIEW_PATH})\n"
+        if (root / PREVIEW_PATH).is_file()
+        else ""
+    )
     objects = "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
     templates = "\n".join(f"- `{t}`" for t in rc.templates)
     vocabulary = ""
@@ -81,7 +102,7 @@ def write(root: Path, referent: Referent, provenance: Provenance, report: dict, 
 # Deconfounded `{referent.name}` dataset
 
 {contents}
-
+{sheet}
 The instruction names the target by its **{rc.naming}**; every value of it is the target and a
 distractor across slots, with {rc.objects_per_scene} objects per scene, all in view. Per-episode
 scene records and the one-word counterfactual instructions are in `meta/scenes.parquet`; the

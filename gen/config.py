@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import List, Optional
 
+from core.layout import layout
 from core.world import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.cli import UserError, compose_config
 from gen.partial import completed
@@ -26,7 +27,7 @@ class GenConfig:
     out: Optional[str] = None  # output folder; default datasets/<referent>
     overwrite: bool = False  # replace a non-empty `out`
     resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
-    image_size: int = 128  # square camera frames, pixels
+    image_size: Optional[int] = None  # square camera frames, pixels; default: the profile's (native 128, libero 256)
     fps: int = 20  # control and recording rate
     codec: str = "h264"  # h264 | av1
     max_attempts: int = 10  # oracle attempts per episode before generation stops
@@ -42,6 +43,7 @@ class GenConfig:
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
+    profile: str = "native"  # native (joint targets, 16-d state) | libero (OSC end-effector deltas, LIBERO's features)
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -62,6 +64,12 @@ def parse(argv: list[str]) -> GenConfig:
 
 
 def validate(cfg: GenConfig) -> None:
+    try:
+        profile = layout(cfg.profile)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    if cfg.image_size is None:
+        cfg.image_size = profile.image_size
     if cfg.n <= 0:
         raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
     if not 16 <= cfg.image_size <= MAX_IMAGE_SIZE or cfg.image_size % 2:

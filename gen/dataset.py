@@ -14,7 +14,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from core.layout import NATIVE
 from core.spec import EpisodeSpec
 from gen import card, faults, scenes
 from gen.audit import agree, audit
@@ -22,6 +21,7 @@ from gen.cli import UserError
 from gen.config import GenConfig
 from gen.partial import GENERATION_PATH, Partial
 from gen.plan import Planned
+from gen.preview import PREVIEW_PATH, contact_sheet
 from gen.provenance import Provenance, run_record
 
 AUDIT_PATH = "meta/audit.json"
@@ -98,9 +98,10 @@ def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, s
         raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
     scenes.write(root, rows)
     write_audit(root, audits)
+    contact_sheet(root, root / PREVIEW_PATH)
     seconds = time.perf_counter() - started
     summary = DatasetSummary(out, len(rows), frames, failed, seconds, audits["written"]["verdict"])
-    contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps)
+    contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.sim.layout)
     card.write(root, planned.referent, provenance, audits["written"], contents)
     faults.point("finalize")
     write_generation(root, provenance, summary.episodes, failed, seconds)
@@ -140,8 +141,10 @@ def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) ->
     """The LeRobot files, from the episode files, in order."""
     from gen.lerobot_writer import Layout, LeRobotWriter
 
-    sim = planned.sim
-    writer = LeRobotWriter(root, Layout(sim.fps, sim.image_size, sim.cameras, NATIVE.state_names, NATIVE.action_names, cfg.codec))
+    sim, features = planned.sim, planned.sim.layout
+    writer = LeRobotWriter(
+        root, Layout(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
+    )
     rows, written = [], []
     for produced in partial.episodes(cfg.n):
         rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))

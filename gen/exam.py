@@ -74,19 +74,21 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
 
 
 def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
-    sim = planned.sim
+    sim, features = planned.sim, planned.sim.layout
     return {
         "referent": planned.referent.name,
         "seed": cfg.seed,
         "split": "exam",
         "command": provenance.command(),
+        **({} if features.name == NATIVE.name else {"profile": features.name}),
         "observation": {
-            "keys": [NATIVE.image_key(c) for c in sim.cameras] + [STATE_KEY, TASK_KEY],
+            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY, TASK_KEY],
             "image_size": sim.image_size,
             "fps": sim.fps,
-            "state_names": list(NATIVE.state_names),
-            "action_names": list(NATIVE.action_names),
-            "action": NATIVE.action_meaning,
+            "state_names": list(features.state_names),
+            "action_names": list(features.action_names),
+            "action": features.action_meaning,
+            **({} if features.name == NATIVE.name else {"mirrored": features.mirrored, "settle_steps": features.settle_steps}),
         },
         "referent_spec": asdict(planned.referent.config),
         "audit": planned.audit,

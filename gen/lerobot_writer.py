@@ -21,6 +21,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from core.layout import IMAGE_PREFIX
 from gen import stats as st
 from gen.video import VideoFile, video_info
 
@@ -50,7 +51,7 @@ class Layout:
     codec: str = "h264"
 
     def video_key(self, camera: str) -> str:
-        return f"observation.images.{camera}"
+        return IMAGE_PREFIX + camera
 
     def features(self) -> dict[str, dict]:
         size = self.image_size

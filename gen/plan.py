@@ -15,6 +15,7 @@ import numpy as np
 
 import referents
 from core import catalog
+from core.layout import layout
 from core.spec import EpisodeSpec, SceneObject, SimSettings
 from core.world import TABLE_TOP_Z
 from gen.audit import audit
@@ -95,7 +96,10 @@ def load_referent(cfg: GenConfig) -> Referent:
 
 
 def sim_settings(cfg: GenConfig) -> SimSettings:
-    return SimSettings(image_size=cfg.image_size, fps=cfg.fps)
+    profile = layout(cfg.profile)
+    return SimSettings(
+        image_size=cfg.image_size or profile.image_size, fps=cfg.fps, cameras=profile.camera_names, profile=profile.name
+    )
 
 
 def check_audit(report: dict) -> None:

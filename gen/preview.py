@@ -1,6 +1,6 @@
 """Contact sheet: one PNG grid of episodes' first agentview frames, each with its instruction.
 
-    python -m gen.preview <dataset> [out=<png>] [n=16] [camera=agentview]
+    python -m gen.preview <dataset> [out=<png>] [n=16] [camera=<camera>]
 
 Frames come from the dataset's videos; a plan (`plan_only=true`) has none, so its scenes are
 rendered from their specs instead.
@@ -12,16 +12,17 @@ import sys
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Optional
 
 import cv2
 import numpy as np
 
-from core.layout import AGENTVIEW, NATIVE
 from core.spec import EpisodeSpec
 from gen import scenes
 from gen.cli import UserError, main
 from gen.lerobot_reader import INFO_PATH, LeRobotReader
 
+PREVIEW_PATH = "preview.png"  # the contact sheet a dataset's card shows
 TILE = 256
 CAPTION = 54
 
@@ -33,7 +34,7 @@ def rendered_frames(specs: list[EpisodeSpec], camera: str) -> dict[int, np.ndarr
 
     out = {}
     for spec in specs:
-        scene = scene_for(spec.assets)
+        scene = scene_for(spec.assets, spec.sim.profile)
         scene.reset(spec)
         cams = Cameras(scene, spec.sim.image_size, (camera,))
         out[spec.index] = cams.render()[camera].copy()
@@ -49,10 +50,16 @@ def tile(frame: np.ndarray, caption: str) -> np.ndarray:
     return np.concatenate([image, panel], axis=0)
 
 
-def contact_sheet(root: Path, out: Path, n: int = 16, camera: str = AGENTVIEW, columns: int = 4) -> Path:
+def contact_sheet(root: Path, out: Path, n: int = 16, camera: str | None = None, columns: int = 4) -> Path:
+    """The sheet of the first `n` episodes' first frames of `camera` (default: the profile's
+    front camera); a ValueError names a camera the dataset's profile does not have."""
     records = scenes.read(root).head(n)
     specs = [EpisodeSpec.from_json(s) for s in records["spec"]]
     episodes = list(records["episode_index"])
+    features = specs[0].sim.layout
+    camera = camera or features.camera_names[0]
+    if camera not in features.cameras:
+        raise ValueError(f"camera must be one of {', '.join(features.camera_names)} (profile {features.name}), got {camera!r}")
     dataset = LeRobotReader(root)
     has_video = (root / INFO_PATH).is_file() and camera in dataset.cameras
     frames = dataset.first_frames(camera, episodes) if has_video else rendered_frames(specs, camera)
@@ -71,7 +78,7 @@ class PreviewOptions:
     dataset: str = ""  # the dataset (or plan) folder
     out: str | None = None  # the PNG to write; default <dataset>/preview.png
     n: int = 16  # how many episodes, from the first
-    camera: str = AGENTVIEW  # which camera's first frame
+    camera: Optional[str] = None  # which camera's first frame; default the profile's front camera
 
 
 def run(options: PreviewOptions) -> None:
@@ -80,10 +87,11 @@ def run(options: PreviewOptions) -> None:
         raise UserError(f"{root} has no {scenes.SCENES_PATH}: not a dataset made by python -m gen")
     if options.n < 1:
         raise UserError(f"n must be at least 1, got {options.n}")
-    if options.camera not in NATIVE.camera_names:
-        raise UserError(f"camera must be one of {', '.join(NATIVE.camera_names)}, got {options.camera!r}")
-    out = Path(options.out) if options.out else root / "preview.png"
-    print(f"wrote {contact_sheet(root, out, options.n, options.camera)}")
+    out = Path(options.out) if options.out else root / PREVIEW_PATH
+    try:
+        print(f"wrote {contact_sheet(root, out, options.n, options.camera)}")
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.layout import NATIVE
 from core.spec import EpisodeSpec, SimSettings
 from core.success import Outcome
 from gen.lerobot_writer import Episode
@@ -52,7 +51,7 @@ class Producer:
         self.sim = sim
         self.codec = codec
         inventory = assets if assets is not None else referent.assets()  # type: ignore[union-attr]
-        self.scene: Scene = scene_for(inventory)
+        self.scene: Scene = scene_for(inventory, sim.profile)
         self.ik = ArmIK(np.asarray(sim.robot_home))
         self._cameras: Cameras | None = None  # made on first use: exams never render
 
@@ -87,7 +86,7 @@ class Producer:
         spec, actions = demo.spec, demo.actions
         size = self.sim.image_size
         frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.sim.cameras}
-        states = np.empty((len(actions), NATIVE.state_size), np.float32)
+        states = np.empty((len(actions), self.sim.layout.state_size), np.float32)
         self.scene.reset(spec)  # colours and body assignment; the states below carry the rest
         for t, physics in enumerate(demo.states):
             self.scene.set_physics_state(physics)

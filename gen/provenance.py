@@ -16,6 +16,7 @@ from importlib import metadata
 from pathlib import Path
 
 from core import __version__
+from core.layout import NATIVE
 from gen.config import GenConfig
 from referents import Referent
 
@@ -30,6 +31,8 @@ NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout
 def run_record(cfg: GenConfig) -> dict:
     """The options that determine a product's bytes: a resumed run must match them."""
     record = {k: getattr(cfg, k) for k in DETERMINING} | cfg.spec_overrides() | {"generator_version": __version__}
+    if cfg.profile != NATIVE.name:  # native records keep the keys they always had, so old runs still resume
+        record["profile"] = cfg.profile
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
@@ -63,7 +66,7 @@ class Provenance:
         """The `python -m gen ...` line that regenerates this product."""
         cfg = self.config
         parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
-        for name in ("codec", "spec", "objects_per_scene", "confound", "split"):
+        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile"):
             value = getattr(cfg, name)
             if value is not None and value != GenConfig.__dataclass_fields__[name].default:
                 parts.append(f"{name}={value}")

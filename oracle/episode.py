@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.demo import Plan
-from core.layout import NATIVE
 from core.spec import EpisodeSpec
 from core.success import Outcome, succeeded
 from oracle.ik import ArmIK, IKError
@@ -46,7 +45,7 @@ def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
     except IKError as exc:
         return Demo(
             spec,
-            np.asarray(skills.actions, np.float32).reshape(-1, NATIVE.action_size),
+            np.asarray(skills.actions, np.float32).reshape(-1, spec.sim.layout.action_size),
             np.asarray(skills.states),
             None,
             False,

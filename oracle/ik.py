@@ -45,6 +45,14 @@ class ArmIK:
         self.posture.set_target(np.concatenate([home, [FINGER_OPEN, -FINGER_OPEN]]))
         self.tol = tol
         self.max_iters = max_iters
+        self._fk = mujoco.MjData(self.model)
+        self._site = self.model.site(EE_SITE).id
+
+    def pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics: the grip site's position and rotation matrix at arm joints `q`."""
+        self._fk.qpos[: len(q)] = q
+        mujoco.mj_kinematics(self.model, self._fk)
+        return self._fk.site_xpos[self._site].copy(), self._fk.site_xmat[self._site].reshape(3, 3).copy()
 
     def solve(self, pos: np.ndarray, yaw: float, seed: np.ndarray) -> np.ndarray:
         self.config.update(np.concatenate([seed, [FINGER_OPEN, -FINGER_OPEN]]))

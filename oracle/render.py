@@ -1,7 +1,8 @@
 """The dataset's cameras, rendered on the CPU with the fast settings.
 
 MuJoCo's defaults (4x MSAA, shadows, reflections, collision geoms) cost about 4x more per frame
-on llvmpipe; none of them helps a policy (README: rendering).
+on llvmpipe; none of them helps a policy (README: rendering). Cameras are the scene's profile's
+(core/layout.py), and a profile whose frames are stored mirrored gets them mirrored here.
 """
 
 from __future__ import annotations
@@ -11,15 +12,15 @@ import atexit
 import mujoco
 import numpy as np
 
-from core.layout import NATIVE
 from oracle.scene import Scene
 
 
 class Cameras:
     def __init__(self, scene: Scene, size: int, cameras: tuple[str, ...]) -> None:
-        unknown = [c for c in cameras if c not in NATIVE.cameras]
+        known = scene.layout.cameras
+        unknown = [c for c in cameras if c not in known]
         if unknown:
-            raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(NATIVE.cameras)}")
+            raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(known)}")
         self.scene = scene
         self.cameras = cameras
         self.renderer = mujoco.Renderer(scene.model, size, size)
@@ -36,9 +37,12 @@ class Cameras:
 
     def render(self) -> dict[str, np.ndarray]:
         """One frame per camera; the arrays are reused by the next call."""
+        layout = self.scene.layout
         for cam in self.cameras:
-            self.renderer.update_scene(self.scene.data, camera=NATIVE.cameras[cam], scene_option=self.option)
+            self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.option)
             self.renderer.render(out=self._buffers[cam])
+            if layout.mirrored:
+                self._buffers[cam][:] = self._buffers[cam][:, ::-1]
         return self._buffers
 
     def close(self) -> None:

@@ -1,11 +1,12 @@
 """Episode spec -> MuJoCo scene: robosuite's Panda, table arena and objects.
 
-A model is compiled once per asset inventory (the spec's `assets`) and every episode re-poses
-it through the simulator state: objects in the episode are moved onto the table, the rest are
-parked under it, out of every camera's view and out of the contact solver. The arm's torque
-motors become joint-position servos with gravity compensation, so an action is exactly what a
-joint-position controller executes: seven joint targets and a gripper command (-1 open,
-+1 closed).
+A model is compiled once per asset inventory (the spec's `assets`) and profile, and every
+episode re-poses it through the simulator state: objects in the episode are moved onto the
+table, the rest are parked under it, out of every camera's view and out of the contact solver.
+The profile's controller (oracle/drives.py) decides what an action does: in the native profile
+the arm's torque motors become joint-position servos with gravity compensation, so an action is
+seven joint targets and a gripper command (-1 open, +1 closed); in the libero profile they stay
+torque motors, driven by robosuite's operational-space controller from end-effector deltas.
 """
 
 from __future__ import annotations
@@ -19,9 +20,10 @@ import mujoco
 import numpy as np
 
 from core import catalog, world
-from core.layout import AGENTVIEW, NATIVE
+from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
 from core.spec import EpisodeSpec, SceneObject
 from oracle import meshes
+from oracle.drives import FINGER_OPEN, SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
 
 # robosuite logs warnings about optional extras at import; they say nothing about our use.
 logging.getLogger("robosuite_logs").addFilter(lambda record: record.levelno >= logging.ERROR)
@@ -37,11 +39,7 @@ from robosuite.models.world import MujocoWorldBase  # noqa: E402
 ARM_JOINTS = tuple(f"robot0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
-FINGER_OPEN = 0.04  # finger joint travel, metres
-
-# Joint-position servo gains (N m / rad, N m s / rad), joints 1..7.
-SERVO_KP = (1500.0, 1500.0, 1500.0, 1500.0, 600.0, 400.0, 200.0)
-SERVO_KV = (120.0, 120.0, 120.0, 120.0, 40.0, 25.0, 12.0)
+HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
 
 
 def _robot():
@@ -106,13 +104,14 @@ def _configure(root: ET.Element) -> None:
             cam.set("fovy", str(world.AGENTVIEW_FOVY))
 
 
-def scene_xml(assets: tuple[tuple[str, int], ...]) -> str:
-    """The MJCF of a scene holding `count` bodies of each catalog kind."""
+def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.controller) -> str:
+    """The MJCF of a scene holding `count` bodies of each catalog kind, for a profile's controller."""
     arena = TableArena(table_full_size=world.TABLE_SIZE, table_offset=(0, 0, world.TABLE_TOP_Z))
     objects = [_build_object(catalog.kind(kind), f"{kind}{i}") for kind, count in sorted(assets) for i in range(count)]
     task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot()], mujoco_objects=objects)
     root = ET.fromstring(task.get_xml())
-    _servo_and_gravcomp(root)
+    if controller == NATIVE.controller:
+        _servo_and_gravcomp(root)
     _configure(root)
     meshes.lighten(root)
     return ET.tostring(root, encoding="unicode")
@@ -140,14 +139,26 @@ class Body:
 class Scene:
     """A compiled scene that episodes re-pose by state, never by re-parsing."""
 
-    def __init__(self, assets: tuple[tuple[str, int], ...]) -> None:
+    def __init__(self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name) -> None:
         self.assets = tuple(sorted(assets))
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets))
-        self.data = mujoco.MjData(self.model)
+        self.layout: FeatureLayout = layout(profile)
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller))
         m = self.model
+        self.drive: Drive
+        if self.layout.controller == NATIVE.controller:
+            self.data = mujoco.MjData(m)
+            self.drive = JointServo(m, self.data)
+        else:
+            from robosuite.utils.binding_utils import MjSim
+
+            sim = MjSim(m)
+            self.data = sim.data._data
+            self.drive = OscPose(sim, ARM_JOINTS, EE_SITE)
         self.arm_qpos = np.array([m.joint(j).qposadr[0] for j in ARM_JOINTS])
         self.finger_qpos = np.array([m.joint(j).qposadr[0] for j in FINGER_JOINTS])
         self.ee_site = m.site(EE_SITE).id
+        self.hand = m.body(HAND_BODY).id
+        self.home = np.zeros(len(ARM_JOINTS))  # the episode's, from reset()
         self.substeps = 1  # set per spec from its fps
         self.bodies: dict[str, list[Body]] = {}
         spots = [(x, y) for x in world.PARK_X for y in world.PARK_Y]
@@ -177,7 +188,7 @@ class Scene:
         home = np.asarray(spec.sim.robot_home)
         d.qpos[self.arm_qpos] = home
         d.qpos[self.finger_qpos] = (FINGER_OPEN, -FINGER_OPEN)
-        d.ctrl[:7] = home
+        d.ctrl[:7] = home if self.layout.controller == NATIVE.controller else 0.0  # servo targets, or torques
         d.ctrl[7:9] = (FINGER_OPEN, -FINGER_OPEN)
         free = {kind: list(bodies) for kind, bodies in self.bodies.items()}
         self.placed = {}
@@ -193,6 +204,8 @@ class Scene:
                 d.qpos[body.qpos_adr : body.qpos_adr + 7] = body.park
                 self._park(body, True)
         mujoco.mj_forward(m, d)
+        self.home = home
+        self.drive.reset(home)
 
     def _park(self, body: Body, parked: bool) -> None:
         """A parked body floats where it is (gravity-compensated) and touches nothing, so it
@@ -212,19 +225,28 @@ class Scene:
                 self.model.geom_rgba[g] = rgba
 
     def step(self, action: np.ndarray) -> None:
-        """Execute one control period: joint targets and gripper command held for `substeps`."""
-        d = self.data
-        d.ctrl[:7] = action[:7]
-        opening = FINGER_OPEN * (1.0 - float(np.clip(action[7], -1.0, 1.0))) / 2.0
-        d.ctrl[7:9] = (opening, -opening)
-        mujoco.mj_step(self.model, d, nstep=self.substeps)
+        """Execute one control period (`substeps` physics steps) of an action of the profile."""
+        self.drive.step(action, self.substeps)
 
     def state(self) -> np.ndarray:
-        """observation.state: joint positions, finger positions, end-effector pose (xyz, wxyz)."""
+        """observation.state of the profile. native: joint positions, finger positions,
+        end-effector pose (xyz, wxyz); libero: end-effector position, axis-angle of the hand
+        body's orientation (robosuite's `eef_quat`, through its `quat2axisangle`), finger positions.
+
+        Poses are recomputed from the current joints first: after a step MuJoCo's derived
+        positions still describe the state before it (a recorded frame's, restored, are fresh)."""
         d = self.data
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, d.site_xmat[self.ee_site])
-        return np.concatenate([d.qpos[self.arm_qpos], d.qpos[self.finger_qpos], d.site_xpos[self.ee_site], quat])
+        mujoco.mj_kinematics(self.model, d)
+        fingers = d.qpos[self.finger_qpos]
+        if self.layout.controller == NATIVE.controller:
+            quat = np.zeros(4)
+            mujoco.mju_mat2Quat(quat, d.site_xmat[self.ee_site])
+            return np.concatenate([d.qpos[self.arm_qpos], fingers, d.site_xpos[self.ee_site], quat])
+        return np.concatenate([d.site_xpos[self.ee_site], axis_angle(d.xquat[self.hand]), fingers])
+
+    def ee_rot(self) -> np.ndarray:
+        """The grip site's orientation, a 3x3 rotation matrix in the world frame."""
+        return self.data.site_xmat[self.ee_site].reshape(3, 3).copy()
 
     def ee_pos(self) -> np.ndarray:
         return self.data.site_xpos[self.ee_site].copy()
@@ -248,11 +270,22 @@ class Scene:
         return state
 
     def set_physics_state(self, state: np.ndarray) -> None:
+        """Restore a state `physics_state` returned; the controller restarts from it."""
         mujoco.mj_setState(self.model, self.data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
         mujoco.mj_forward(self.model, self.data)
+        self.drive.reset(self.home)
+
+
+def axis_angle(wxyz: np.ndarray) -> np.ndarray:
+    """robosuite's `quat2axisangle` (of the xyzw quaternion), as LIBERO's state uses it."""
+    w = float(np.clip(wxyz[0], -1.0, 1.0))
+    den = np.sqrt(1.0 - w * w)
+    if np.isclose(den, 0.0):
+        return np.zeros(3)
+    return np.asarray(wxyz[1:]) * 2.0 * np.arccos(w) / den
 
 
 @lru_cache(maxsize=4)
-def scene_for(assets: tuple[tuple[str, int], ...]) -> Scene:
-    """One compiled scene per inventory and process."""
-    return Scene(assets)
+def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name) -> Scene:
+    """One compiled scene per inventory, profile and process."""
+    return Scene(assets, profile)

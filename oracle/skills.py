@@ -7,9 +7,11 @@ reads like a few lines, e.g. `skills.grasp(spec.target); skills.lift()`.
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from core import catalog, contact
+from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from core.success import PUSH_DIRECTION
 from oracle.ik import ArmIK, grasp_yaw
@@ -17,6 +19,23 @@ from oracle.scene import Scene
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
+# Under an end-effector-delta controller (the libero profile) the plan stays a joint path; each
+# control step sends the delta from where the hand is to where the path's next waypoint puts it,
+# amplified (the OSC covers only part of a commanded delta in one step), and a move ends once
+# the hand has settled on its goal.
+DELTA_GAIN = 3.0
+SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control steps
+
+
+def rotation_vector(rot: np.ndarray) -> np.ndarray:
+    """The axis-angle vector (world frame) of a rotation matrix, angle in [0, pi]."""
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, rot.flatten())
+    if quat[0] < 0:
+        quat = -quat
+    angle = 2.0 * np.arccos(np.clip(quat[0], -1.0, 1.0))
+    norm = np.linalg.norm(quat[1:])
+    return np.zeros(3) if norm < 1e-12 else quat[1:] / norm * angle
 
 
 class Skills:
@@ -32,13 +51,32 @@ class Skills:
         self.held: tuple[str, float] | None = None  # (object id, grip site height above its bottom)
         self.actions: list[np.ndarray] = []
         self.states: list[np.ndarray] = []  # physics state before each action
+        self.deltas = scene.layout.controller != NATIVE.controller
 
     def _execute(self, q: np.ndarray) -> None:
         # The action is rounded to float32 before execution: what is recorded is what ran.
-        action = np.concatenate([q, [self.gripper]]).astype(np.float32)
+        command = self._delta_toward(q) if self.deltas else q
+        action = np.concatenate([command, [self.gripper]]).astype(np.float32)
         self.states.append(self.scene.physics_state())
         self.scene.step(action)
         self.actions.append(action)
+
+    def _error(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Position and rotation (world-frame axis-angle) from the hand to where `q` puts it."""
+        pos, rot = self.ik.pose(q)
+        return pos - self.scene.ee_pos(), rotation_vector(rot @ self.scene.ee_rot().T)
+
+    def _delta_toward(self, q: np.ndarray) -> np.ndarray:
+        dpos, drot = self._error(q)
+        return np.clip(DELTA_GAIN * np.concatenate([dpos / OSC_POS_LIMIT, drot / OSC_ORI_LIMIT]), -1.0, 1.0)
+
+    def _settle(self, q: np.ndarray) -> None:
+        """Under deltas, hold the goal until the hand is on it (servos need no settling)."""
+        for _ in range(MAX_SETTLE_STEPS if self.deltas else 0):
+            dpos, drot = self._error(q)
+            if np.linalg.norm(dpos) < SETTLE_POS and np.linalg.norm(drot) < SETTLE_ROT:
+                return
+            self._execute(q)
 
     def _kind(self, object_id: str) -> catalog.Kind:
         return catalog.kind(self.spec.object(object_id).kind)
@@ -80,10 +118,12 @@ class Skills:
             self._execute(self.q)
 
     def close(self, steps: int = 8) -> None:
+        self._settle(self.q)
         self.gripper = CLOSED
         self.hold(steps)
 
     def open(self, steps: int = 6) -> None:
+        self._settle(self.q)
         self.gripper = OPEN
         self.held = None
         self.hold(steps)

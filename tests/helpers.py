@@ -19,8 +19,8 @@ def make_dataset(out: Path, *overrides: str) -> Path:
     return out
 
 
-def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]:
-    """Pixels per body id in a segmentation render of `camera` (collision geoms hidden)."""
+def body_image(scene: Scene, camera: str, size: int = 128) -> np.ndarray:
+    """The body id seen at each pixel of an upright render of `camera` (-1: none; collision geoms hidden)."""
     renderer = mujoco.Renderer(scene.model, size, size)
     renderer.enable_segmentation_rendering()
     option = mujoco.MjvOption()
@@ -28,6 +28,12 @@ def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]
     renderer.update_scene(scene.data, camera=NATIVE.cameras[camera], scene_option=option)
     seg = renderer.render()
     renderer.close()
-    geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
-    bodies, counts = np.unique(scene.model.geom_bodyid[geoms], return_counts=True)
+    is_geom = seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM
+    return np.where(is_geom, scene.model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1)
+
+
+def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]:
+    """Pixels per body id in a segmentation render of `camera`."""
+    image = body_image(scene, camera, size)
+    bodies, counts = np.unique(image[image >= 0], return_counts=True)
     return dict(zip(bodies.tolist(), counts.tolist()))

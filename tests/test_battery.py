@@ -63,7 +63,7 @@ def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pyt
     )
     out = tmp_path_factory.mktemp("runs")
     reports = {
-        p: take(exam, exam.trials, make(p), out / p, workers=2, policy_name=p)[0] for p in ("oracle", "position", "nothing")
+        p: take(exam, exam.trials, make(p), out / p, workers=2, policy_name=p)[0] for p in ("position", "oracle", "nothing")
     }
     oracle, position, nothing = reports["oracle"]["faces"], reports["position"]["faces"], reports["nothing"]["faces"]
     assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["true_target"]["rate"] <= 0.05

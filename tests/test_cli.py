@@ -39,6 +39,7 @@ def _untouched(out: Path) -> bool:
         (["image_size=13"], "image_size"),
         (["fps=7"], "fps must divide"),
         (["codec=mpeg2"], "codec must be one of"),
+        (["profile=openvla"], "unknown profile 'openvla'; known: native, libero"),
         (["n"], "key=value"),
     ],
 )

@@ -13,11 +13,11 @@ meta/episodes) are pinned per CPU family and checked where the family is known.
 from __future__ import annotations
 
 import hashlib
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
-
-from helpers import make_dataset
 
 CASES = {
     "object": ("referent=object", "n=2", "image_size=32", "seed=3", "workers=1"),
@@ -87,8 +87,12 @@ def _hashes(root: Path, files: dict[str, str]) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def outputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Each output made by the command itself, in a fresh process, as a user would run it."""
     base = tmp_path_factory.mktemp("golden")
-    return {case: make_dataset(base / case, *options) for case, options in CASES.items()}
+    for case, options in CASES.items():
+        made = subprocess.run([sys.executable, "-m", "gen", *options, f"out={base / case}"], capture_output=True, text=True)
+        assert made.returncode == 0, made.stderr
+    return {case: base / case for case in CASES}
 
 
 @pytest.mark.parametrize("case", CASES)

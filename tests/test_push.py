@@ -55,6 +55,7 @@ def test_push_then_pull_back_and_load(object_dataset: Path, tmp_path: Path) -> N
         assert "LeRobot" in front["tags"] and front["task_categories"] == ["robotics"]
         assert front["configs"][0]["data_files"] == "data/*/*.parquet" and front["license"]
         assert "## Confound audit" in card and "referent spec hash" in card and "split=exam" in card
+        assert "](preview.png)" in card and repo.files["preview.png"].startswith(b"\x89PNG")
         pulled = tmp_path / "pulled"
         code = (
             "from huggingface_hub import snapshot_download;"

@@ -34,6 +34,7 @@ from core.layout import NATIVE  # noqa: E402
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
 CAMERAS = NATIVE.camera_names
+LOCATE_ORIGIN, LOCATE_SCALE = (0.0, 0.0, 0.85), 0.2  # the auxiliary target: table centre, 20 cm units
 STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
 
 
@@ -157,7 +158,12 @@ class TinyPolicy(nn.Module):
     @staticmethod
     def locate_target(position: torch.Tensor) -> torch.Tensor:
         """World position -> the auxiliary head's normalised target (table centre, 20 cm units)."""
-        return (position - torch.tensor([0.0, 0.0, 0.85])) / 0.2
+        return (position - torch.tensor(LOCATE_ORIGIN)) / LOCATE_SCALE
+
+    @staticmethod
+    def world_position(located: torch.Tensor) -> torch.Tensor:
+        """The auxiliary head's output -> a world position (the inverse of `locate_target`)."""
+        return located * LOCATE_SCALE + torch.tensor(LOCATE_ORIGIN)
 
     def normalise(self, action: torch.Tensor) -> torch.Tensor:
         return (action - self.action_mean) / self.action_std

@@ -89,6 +89,10 @@ class CheckpointPolicy:
 
     def chunk(self, observation: dict) -> np.ndarray:
         """The next `chunk` actions (chunk, 8) for an observation dict."""
+        return self._forward(observation)[0]
+
+    def _forward(self, observation: dict) -> tuple[np.ndarray, np.ndarray]:
+        """(the action chunk, the located target in world coordinates) for an observation."""
         import torch
 
         size = self.model.config.image_size
@@ -103,8 +107,13 @@ class CheckpointPolicy:
             frames = {c: np.ascontiguousarray(observation[NATIVE.image_key(c)]) for c in self.model.cameras}
             images = {c: torch.from_numpy(frame)[None] for c, frame in frames.items()}
             state = torch.from_numpy(np.asarray(observation[STATE_KEY], np.float32))[None]
-            actions, _ = self.model(images, state, self._embeddings[text])
-            return self.model.denormalise(actions)[0].numpy()
+            actions, located = self.model(images, state, self._embeddings[text])
+            return self.model.denormalise(actions)[0].numpy(), self.model.world_position(located)[0].numpy()
+
+    def locate(self, observation: dict) -> np.ndarray:
+        """Where the auxiliary head believes the named object stands (world x, y, z): the
+        battery's grounding readout, which does not depend on the motor."""
+        return self._forward(observation)[1]
 
     def act(self, observation: dict) -> np.ndarray:
         if not self._queue:

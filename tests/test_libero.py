@@ -1,0 +1,169 @@
+"""The libero profile: LIBERO's features, actions that are end-effector deltas through
+robosuite's OSC_POSE controller, frames oriented as lerobot's LIBERO datasets store them, and
+exams that take (and check) actions of that shape."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from ledataset.datasets.lerobot_dataset import LeRobotDataset
+
+import referents
+from core.exam import read
+from core.layout import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
+from core.spec import EpisodeSpec, SimSettings
+from core.success import succeeded
+from eval.battery import take
+from eval.env import ExamEnv
+from eval.registry import make
+from eval.rollout import ProfileMismatch, Runner
+from gen import scenes
+from gen.lerobot_reader import LeRobotReader
+from gen.plan import plan
+from helpers import body_image, make_dataset
+from oracle.episode import replay
+from oracle.render import Cameras
+from oracle.scene import scene_for
+
+
+@pytest.fixture(scope="module")
+def libero_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return make_dataset(tmp_path_factory.mktemp("libero") / "object", "n=4", "profile=libero", "image_size=64", "seed=5")
+
+
+def test_lerobot_loads_exactly_the_libero_features(libero_dataset: Path) -> None:
+    ds = LeRobotDataset("local/libero", root=libero_dataset)
+    features = ds.meta.features
+    assert set(LIBERO.image_keys) | {STATE_KEY, ACTION_KEY} <= set(features)
+    assert not set(NATIVE.image_keys) & set(features)
+    assert features[STATE_KEY]["shape"] in ([8], (8,)) and features[ACTION_KEY]["shape"] in ([7], (7,))
+    assert ds.meta.fps == 20
+    item = ds[0]
+    assert tuple(item[STATE_KEY].shape) == (8,) and tuple(item[ACTION_KEY].shape) == (7,)
+    assert tuple(item[LIBERO.image_key("image")].shape) == (3, 64, 64)
+    actions = np.stack(LeRobotReader(libero_dataset).data[ACTION_KEY].to_numpy())
+    assert np.all(np.abs(actions) <= 1.0) and set(np.unique(actions[:, 6])) <= {-1.0, 1.0}
+    card = (libero_dataset / "README.md").read_text()
+    assert "Profile `libero`" in card and "20 Hz" in card
+    generation = json.loads((libero_dataset / "meta/generation.json").read_text())
+    assert generation["config"]["profile"] == "libero" and "profile=libero" in card
+
+
+def test_recorded_deltas_replay_through_the_controller_to_the_same_success(libero_dataset: Path) -> None:
+    reader = LeRobotReader(libero_dataset)
+    records = scenes.read(libero_dataset)
+    for rec in records.itertuples():
+        spec = EpisodeSpec.from_json(rec.spec)
+        rows = reader.data[reader.data.episode_index == rec.episode_index]
+        actions, states = np.stack(rows[ACTION_KEY].to_numpy()), np.stack(rows[STATE_KEY].to_numpy())
+        scene = scene_for(spec.assets, spec.sim.profile)
+        seen: list[np.ndarray] = []
+        outcome = replay(scene, spec, actions, observe=lambda t: seen.append(scene.state().astype(np.float32)))
+        assert np.array_equal(np.stack(seen), states), f"episode {rec.episode_index}: states differ on replay"
+        assert succeeded(spec, outcome), f"episode {rec.episode_index}: replay misses the success predicate"
+        # the state's end-effector position is the grip site's, and the deltas moved it
+        assert np.abs(np.diff(states[:, :3], axis=0)).max() <= 2 * OSC_POS_LIMIT
+
+
+def test_frames_are_mirrored_as_in_lerobots_libero_datasets() -> None:
+    """lerobot's LIBERO datasets hold robosuite's (upside-down, OpenGL) frames turned 180
+    degrees: upright, mirrored left to right. An object on the robot's left (+y), which an
+    upright agentview shows on the right, must be on the left of a libero frame."""
+    ref = referents.load("object")
+    spec = plan(ref, 1, seed=0, sim=SimSettings(image_size=64))[0]
+    left = max(spec.objects, key=lambda o: o.pos[1])
+    frames = {}
+    for profile, cams in (("native", NATIVE.camera_names), ("libero", LIBERO.camera_names)):
+        scene = scene_for(spec.assets, profile)
+        scene.reset(spec)
+        cameras = Cameras(scene, 64, cams)
+        frames[profile] = {c: f.copy() for c, f in cameras.render().items()}
+        cameras.close()
+    for native_cam, libero_cam in zip(NATIVE.camera_names, LIBERO.camera_names):
+        assert np.array_equal(frames["libero"][libero_cam], frames["native"][native_cam][:, ::-1])
+    assert left.pos[1] > 0
+    scene = scene_for(spec.assets, "native")
+    scene.reset(spec)
+    _, columns = np.nonzero(body_image(scene, AGENTVIEW, 64) == scene.placed[left.id].body_id)
+    assert columns.mean() > 32, "upright agentview: the robot's left is on the image's right"
+    mirrored = frames["libero"][LIBERO.camera_names[0]]
+    assert np.array_equal(mirrored[:, 64 - 1 - int(columns.mean())], frames["native"][AGENTVIEW][:, int(columns.mean())])
+
+
+def test_a_libero_exam_ranks_the_reference_policies(tmp_path_factory: pytest.TempPathFactory) -> None:
+    root = make_dataset(tmp_path_factory.mktemp("exam") / "x", "n=8", "split=exam", "seed=3", "profile=libero", "image_size=32")
+    exam = read(root)
+    assert json.loads((root / "exam.json").read_text())["profile"] == "libero"
+    out = tmp_path_factory.mktemp("runs")
+    oracle = take(exam, exam.trials, make("oracle"), out / "oracle", workers=1, policy_name="oracle")[0]["faces"]
+    nothing = take(exam, exam.trials, make("nothing"), out / "nothing", workers=1, policy_name="nothing")[0]["faces"]
+    assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["task"]["rate"] >= 0.95
+    assert all(f["k"] == 0 for f in nothing.values())
+
+
+def test_an_action_of_the_other_profile_is_refused_naming_it(tmp_path: Path) -> None:
+    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "seed=3", "profile=libero", "image_size=32")
+    env = ExamEnv(root, row=0)
+    env.reset()
+    with pytest.raises(ProfileMismatch, match=r"native-profile actions of shape \(8,\), but this exam is profile libero"):
+        env.step(np.zeros(NATIVE.action_size, np.float32))
+    obs, *_ = env.step(np.zeros(LIBERO.action_size, np.float32))
+    assert set(obs) == {*LIBERO.image_keys, STATE_KEY}
+    env.close()
+    joint_targets = make("nothing")
+    joint_targets.reset = lambda context: None  # type: ignore[method-assign]
+    joint_targets.act = lambda observation: np.zeros(NATIVE.action_size, np.float32)  # type: ignore[method-assign]
+    with pytest.raises(ProfileMismatch):
+        Runner(joint_targets).run(read(root).trials.iloc[0])
+
+
+def test_an_openpi_libero_server_takes_a_keys_libero_exam(tmp_path: Path) -> None:
+    """A loopback server speaking openpi's protocol checks each request is exactly what openpi's
+    LIBERO example client sends (keys, dtypes, shapes) and answers with 7-d action chunks."""
+    import threading
+
+    from openpi_client import msgpack_numpy
+    from websockets.sync.server import serve
+
+    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "seed=3", "profile=libero", "image_size=64")
+    seen: list[dict] = []
+    packer = msgpack_numpy.Packer()
+
+    def handler(ws) -> None:  # noqa: ANN001
+        ws.send(packer.pack({"server": "libero-check"}))
+        for message in ws:
+            request = msgpack_numpy.unpackb(message)
+            seen.append({k: (type(v).__name__, getattr(v, "dtype", None), getattr(v, "shape", None)) for k, v in request.items()})
+            ws.send(packer.pack({"actions": np.tile([0, 0, 0, 0, 0, 0, -1.0], (10, 1))}))
+
+    with serve(handler, "127.0.0.1", 0) as server:
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+        address = f"127.0.0.1:{server.socket.getsockname()[1]}"
+        exam = read(root)
+        rows = exam.trials.head(1)
+        report, _ = take(exam, rows, make(f"remote:{address}", keys="libero"), tmp_path / "report", baseline=False)
+        server.shutdown()
+    assert not report["errors"], report["errors"]
+    steps = int(rows["max_steps"].iloc[0])
+    assert len(seen) == -(-steps // 5)  # a query every 5 actions, as the example's replan_steps
+    assert seen[0] == {
+        "observation/image": ("ndarray", np.dtype(np.uint8), (224, 224, 3)),
+        "observation/wrist_image": ("ndarray", np.dtype(np.uint8), (224, 224, 3)),
+        "observation/state": ("ndarray", np.dtype(np.float64), (8,)),
+        "prompt": ("str", None, None),
+    }
+    bad = subprocess.run(
+        [sys.executable, "-m", "eval", f"policy=remote:{address}", "keys=libero", f"exam={native_exam(tmp_path)}"],
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode == 2 and "this exam is profile native" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def native_exam(tmp_path: Path) -> Path:
+    return make_dataset(tmp_path / "native-exam", "n=1", "split=exam", "seed=3", "image_size=32")
