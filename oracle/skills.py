@@ -15,14 +15,14 @@ from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from core.success import PUSH_DIRECTION
 from oracle.ik import ArmIK, grasp_yaw
-from oracle.scene import Scene
+from oracle.scene import Scene, axis_angle
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
 # Under an end-effector-delta controller (the libero profile) the plan stays a joint path; each
 # control step sends the delta from where the hand is to where the path's next waypoint puts it,
-# amplified (the OSC covers only part of a commanded delta in one step), and a move ends once
-# the hand has settled on its goal.
+# amplified (the OSC covers only part of a commanded delta in one step), and before the gripper
+# closes or opens the hand settles on its goal.
 DELTA_GAIN = 3.0
 SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control steps
 
@@ -31,11 +31,7 @@ def rotation_vector(rot: np.ndarray) -> np.ndarray:
     """The axis-angle vector (world frame) of a rotation matrix, angle in [0, pi]."""
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, rot.flatten())
-    if quat[0] < 0:
-        quat = -quat
-    angle = 2.0 * np.arccos(np.clip(quat[0], -1.0, 1.0))
-    norm = np.linalg.norm(quat[1:])
-    return np.zeros(3) if norm < 1e-12 else quat[1:] / norm * angle
+    return axis_angle(quat if quat[0] >= 0 else -quat)
 
 
 class Skills:
