@@ -1,8 +1,13 @@
-"""The exam format: `exam.json` + `trials.parquet`, readable without this package.
+"""The exam format (version 2): `exam.json`, `trials.parquet` and `answers.parquet`, readable
+without this package.
 
 An exam is made from the same specs as a dataset, on the held-out `exam` random stream (its
 scene hashes never occur in a training split). Every trial is a scene the oracle solved, and
-each row of `trials.parquet` is one rollout to run from that scene's initial state:
+each row is one rollout to run from that scene's initial state. What a rollout needs — the
+scene, its initial state, the instruction — is in `trials.parquet`, the policy's side; the
+answer key — which face a row is, what it asks for, the full episode spec with its target and
+counterfactuals — is in `answers.parquet`, which only the scorer reads. Hand a policy nothing
+from answers.parquet and it cannot cheat without knowing.
 
 | face | instruction | asks for | cameras |
 |---|---|---|---|
@@ -11,14 +16,20 @@ each row of `trials.parquet` is one rollout to run from that scene's initial sta
 | `occ` | the original | the original | blanked (all zeros) |
 | `nonsense` | `xxx` | the original | on |
 
-Columns of trials.parquet:
-  row (int, unique), trial (int), face (str), variant (int: 0 for task/occ/nonsense, 1.. for
-  swaps), instruction (str), target (str: the object asked for), program (str: pick | push |
-  place), original_target (str), original_program (str), occluded (bool), spec (JSON: the
-  trial's episode spec, see core/spec.py), scene_hash (str), initial_state (list[float]: MuJoCo
-  mjSTATE_INTEGRATION), max_steps (int: rollout horizon at the exam's fps), alternatives (JSON:
-  `[{"target", "program"}]`, the original first: what the instruction chooses among), slot
-  (int: slot of the object asked for), value (str: what the instruction calls it).
+Columns of trials.parquet (the policy's side):
+  row (int, unique), trial (int: rollouts of a trial share its scene), instruction (str),
+  occluded (bool: the cameras are blanked), scene (JSON: the episode spec with the answer
+  withheld — objects with id, kind, name, slot, pos, yaw, attributes; the inventory; the sim
+  settings and profile; target, instruction, counterfactuals and task left empty; see
+  core/spec.py), initial_state (list[float]: MuJoCo mjSTATE_INTEGRATION of the compiled scene),
+  max_steps (int: rollout horizon at the exam's fps).
+Columns of answers.parquet (the scorer's side), one row per rollout too:
+  row, face (str), variant (int: 0 for task/occ/nonsense, 1.. for swaps), target (str: the
+  object asked for), program (str: pick | push | place), original_target (str),
+  original_program (str), spec (JSON: the trial's full episode spec), scene_hash (str),
+  alternatives (JSON: `[{"target", "program"}]`, the original first: what the instruction
+  chooses among), slot (int: slot of the object asked for), value (str: what the instruction
+  calls it).
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
@@ -41,7 +52,8 @@ from core import __version__, catalog, contact, parquet, success
 from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
-EXAM_VERSION = 1
+EXAM_VERSION = 2
+TRIALS_FILE, ANSWERS_FILE = "trials.parquet", "answers.parquet"
 NONSENSE = "xxx"
 FACES = {
     "task": "original instruction; success = the program's predicate on the original target",
@@ -51,9 +63,10 @@ FACES = {
 }
 REACH_THRESHOLDS = (0.02, 0.05)
 LANDING = 0.05  # closest approach (m) at which a rollout counts as landing on an alternative
-COLUMNS = (
-    "row", "trial", "face", "variant", "instruction", "target", "program", "original_target", "original_program",
-    "occluded", "spec", "scene_hash", "initial_state", "max_steps", "alternatives", "slot", "value",
+PUBLIC_COLUMNS = ("row", "trial", "instruction", "occluded", "scene", "initial_state", "max_steps")
+ANSWER_COLUMNS = (
+    "row", "face", "variant", "target", "program", "original_target", "original_program", "spec", "scene_hash",
+    "alternatives", "slot", "value",
 )  # fmt: skip
 
 
@@ -101,6 +114,7 @@ def trial_rows(
         "original_target": spec.target,
         "original_program": spec.task.program,
         "spec": spec.to_json(),
+        "scene": spec.public().to_json(),
         "scene_hash": spec.scene_hash,
         "initial_state": initial_state,
         "max_steps": max_steps,
@@ -123,8 +137,8 @@ def trial_rows(
 def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
     for i, r in enumerate(rows):
         r["row"] = i
-    table = pa.Table.from_pylist([{c: r[c] for c in COLUMNS} for r in rows])
-    pq.write_table(table, root / "trials.parquet")
+    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, ANSWER_COLUMNS)):
+        pq.write_table(pa.Table.from_pylist([{c: r[c] for c in columns} for r in rows]), root / name)
     header = {
         "format": EXAM_FORMAT,
         "version": EXAM_VERSION,
@@ -145,6 +159,8 @@ def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
 
 @dataclass
 class Exam:
+    """An exam as the battery and the scorer see it: `trials` joins both files on `row`."""
+
     root: Path
     meta: dict[str, Any]
     trials: pd.DataFrame
@@ -169,20 +185,33 @@ def read(root: Path | str) -> Exam:
     if not isinstance(meta, dict) or meta.get("format") != EXAM_FORMAT:
         raise ExamError(f"{root}/exam.json is not a {EXAM_FORMAT} file")
     if meta.get("version") != EXAM_VERSION:
-        raise ExamError(f"{root}: exam format version {meta.get('version')} is not supported (this reader: {EXAM_VERSION})")
-    try:
-        trials = parquet.read(root / "trials.parquet")
-    except FileNotFoundError:
-        raise ExamError(f"{root} has no trials.parquet") from None
-    except Exception as exc:  # pyarrow raises several types for damaged files
-        raise ExamError(f"{root}/trials.parquet is corrupt: {type(exc).__name__}: {exc}") from None
-    missing = [c for c in COLUMNS if c not in trials.columns]
-    if missing:
-        raise ExamError(f"{root}/trials.parquet lacks columns {missing}")
+        raise ExamError(
+            f"{root}: exam format version {meta.get('version')} is not supported (this reader: {EXAM_VERSION}); "
+            "make the exam again with this generator"
+        )
+    trials, answers = (
+        _table(root, name, columns) for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, ANSWER_COLUMNS))
+    )
     if len(trials) != meta.get("rollouts") or trials["trial"].nunique() != meta.get("trials"):
-        raise ExamError(f"{root}: trials.parquet holds {len(trials)} rollouts, exam.json says {meta.get('rollouts')}")
+        raise ExamError(f"{root}: {TRIALS_FILE} holds {len(trials)} rollouts, exam.json says {meta.get('rollouts')}")
+    if sorted(trials["row"]) != sorted(answers["row"]) or trials["row"].duplicated().any():
+        raise ExamError(f"{root}: {TRIALS_FILE} and {ANSWERS_FILE} do not hold the same rows once each")
+    trials = trials.merge(answers, on="row")
     try:
         EpisodeSpec.from_json(trials["spec"].iloc[0])
     except SpecError as exc:
         raise ExamError(f"{root}: {exc}") from None
     return Exam(root, meta, trials.sort_values("row").reset_index(drop=True))
+
+
+def _table(root: Path, name: str, columns: tuple[str, ...]) -> pd.DataFrame:
+    try:
+        table = parquet.read(root / name)
+    except FileNotFoundError:
+        raise ExamError(f"{root} has no {name}") from None
+    except Exception as exc:  # pyarrow raises several types for damaged files
+        raise ExamError(f"{root}/{name} is corrupt: {type(exc).__name__}: {exc}") from None
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise ExamError(f"{root}/{name} lacks columns {missing}")
+    return table

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from core.layout import NATIVE, FeatureLayout, layout
@@ -121,6 +121,11 @@ class EpisodeSpec:
             if obj.id == object_id:
                 return obj
         raise KeyError(f"no object {object_id!r} in episode {self.index}")
+
+    def public(self) -> EpisodeSpec:
+        """The scene alone, as a policy may see it: objects, poses, inventory and sim settings,
+        with the answer (target, instruction, counterfactuals, task) withheld."""
+        return replace(self, target="", instruction="", template="", counterfactuals=(), task=TaskSpec(program="", params={}))
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from core import __version__, cache_dir
-from core.exam import Exam
+from core.exam import ANSWERS_FILE, TRIALS_FILE, Exam
 
 SHORTCUT = "position"  # the reference policy whose rates are the shortcut baseline
 
@@ -24,7 +24,7 @@ REPORT_VERSION = 2  # of eval/score.py's report: a baseline scored by another ve
 
 def _file(exam: Exam, rows: Sequence[int]) -> Path:
     digest = hashlib.sha256(f"{__version__}/{REPORT_VERSION}/{sorted(int(r) for r in rows)}".encode())
-    for name in ("exam.json", "trials.parquet"):
+    for name in ("exam.json", TRIALS_FILE, ANSWERS_FILE):
         digest.update((exam.root / name).read_bytes())
     return cache_dir() / "baselines" / f"{digest.hexdigest()[:24]}.json"
 

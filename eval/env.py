@@ -11,8 +11,9 @@ observation has the dataset's keys; the action is the dataset's, in the exam's p
 7 joint targets + gripper; libero: a 7-d end-effector delta through OSC_POSE, and reset first
 runs the settle steps lerobot's LIBERO environment runs).
 `reward` is 1.0 while the asked-for program is achieved; the episode truncates at the row's
-horizon. `info` carries the end-effector and object positions the offline scorer takes
-(`python -m eval.score`).
+horizon. `info` carries the instruction, the row, its horizon and the end-effector and object
+positions the offline scorer takes (`python -m eval.score`) — never the answer: what the row
+asks for stays in the exam's answers.parquet, which only the scorer (and this reward) reads.
 """
 
 from __future__ import annotations
@@ -79,9 +80,6 @@ class ExamEnv(gym.Env):
         return {
             "instruction": self.row["instruction"],
             "row": int(self.row["row"]),
-            "face": self.row["face"],
-            "target": self.row["target"],
-            "program": self.row["program"],
             "max_steps": int(self.row["max_steps"]),
             "ee": self.scene.ee_pos(),
             "objects": self.scene.positions(),

@@ -152,9 +152,10 @@ def write_exam(root: Path, referent: Referent, provenance: Provenance, report: d
 
 {trials} oracle-solvable trials on the held-out `exam` random stream (scene hashes never
 occur in a training split). Each trial holds the pixels, scene and robot pose fixed and changes
-one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit)
-and `trials.parquet` (one row per rollout); the format is documented in `exam.json` and in the
-generator's `core/exam.py`.
+one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit),
+`trials.parquet` (one row per rollout: what a policy may see — scene, initial state, instruction)
+and `answers.parquet` (the answer key, for the scorer only); the format is documented in the
+generator's `core/exam.py` and README.
 
 | face | meaning |
 |---|---|

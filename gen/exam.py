@@ -1,5 +1,6 @@
 """The exam builder (`split=exam`): an audited plan on the held-out random stream -> an exam
-(`exam.json` + `trials.parquet`, format in core/exam.py) of trials the oracle has solved.
+(`exam.json`, `trials.parquet`, `answers.parquet`; format in core/exam.py) of trials the oracle
+has solved.
 
 Every trial is demonstrated once (resampling poses as for datasets) to prove it solvable and to
 record its initial state and rollout horizon; no video is written, so the exam is built in a
@@ -82,7 +83,9 @@ def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
         "command": provenance.command(),
         **({} if features.name == NATIVE.name else {"profile": features.name}),
         "observation": {
-            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY, TASK_KEY],
+            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY],
+            "instruction": f"the `instruction` column of trials.parquet; info['instruction'] in the gymnasium env; "
+            f"`{TASK_KEY}` in python -m eval's observation dicts",
             "image_size": sim.image_size,
             "fps": sim.fps,
             "state_names": list(features.state_names),

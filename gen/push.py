@@ -2,7 +2,7 @@
 
 Pushes a generated dataset (or exam) to a Hugging Face-compatible hub the way lerobot does:
 create the dataset repo, upload the folder in one commit, tag it (`v3.0` for datasets, so
-lerobot's loader finds it; `exam-v1` for exams). The endpoint and token come from the usual
+lerobot's loader finds it; `exam-v<format version>` for exams). The endpoint and token come from the usual
 HF_ENDPOINT / HF_TOKEN / `huggingface-cli login`. It refuses a dataset that is incomplete or
 fails `gen.check`, never prints the token, and when the upload fails says what was and was not
 committed: the upload is a single commit, so a retry of the same command is always safe.

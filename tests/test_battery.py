@@ -34,7 +34,7 @@ def small_exam(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_exam_scenes_never_occur_in_training(small_exam: Path, object_dataset: Path) -> None:
-    exam_hashes = set(parquet.read(small_exam / "trials.parquet")["scene_hash"])
+    exam_hashes = set(parquet.read(small_exam / "answers.parquet")["scene_hash"])
     assert exam_hashes.isdisjoint(set(scenes.read(object_dataset)["scene_hash"]))
     ref = referents.load("object")
     train = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings())}
@@ -44,8 +44,10 @@ def test_exam_scenes_never_occur_in_training(small_exam: Path, object_dataset: P
 
 def test_exam_format_reads_without_our_code(small_exam: Path) -> None:
     meta = json.loads((small_exam / "exam.json").read_text())
-    trials = parquet.read(small_exam / "trials.parquet")
-    assert meta["format"] == "deconfound-exam" and meta["version"] == 1
+    public, answers = parquet.read(small_exam / "trials.parquet"), parquet.read(small_exam / "answers.parquet")
+    assert not {"face", "target", "program", "spec", "alternatives", "original_target"} & set(public.columns)
+    trials = public.merge(answers, on="row")
+    assert meta["format"] == "deconfound-exam" and meta["version"] == 2
     assert {"scoring", "geometry", "faces", "observation", "audit"} <= set(meta)
     assert meta["trials"] == 6 and meta["rollouts"] == len(trials)
     for _, t in trials.groupby("trial"):

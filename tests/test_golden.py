@@ -2,7 +2,9 @@
 
 The hashes were recorded with the code as it stood before the package restructuring (commit
 2f5bc96); the same options and seed must give the same data parquet, videos and scene records.
-A change that means to alter the output updates them in the same commit and says why.
+A change that means to alter the output updates them in the same commit and says why: the
+exam's files changed once, when exam format 2 split the answer key out of trials.parquet (the
+rows' physics, initial states and horizons are the same).
 
 What the physics and the planner write (actions, states, scene records, exam trials) is the
 same on every x86-64 machine. Rendered pixels are not: Mesa's llvmpipe compiles its rasteriser
@@ -33,8 +35,9 @@ SHA256 = {  # first 40 hex digits of each file's sha256: the same on every machi
         "data/chunk-000/file-000.parquet": "59680dd35e33fb3d75d3d6668f78ae5f6aec5a56",
         "meta/scenes.parquet": "ebf9d08f2aeb6712f49ee9bf1aac2e428d040df5",
     },
-    "exam": {
-        "trials.parquet": "1e2593577e589c95ba509472641aa8c2ed0f9fc9",
+    "exam": {  # exam format 2 (the answer key moved to answers.parquet; trials.parquet is the policy's side)
+        "trials.parquet": "02194649cf3731a68b8af8e684385d5d5fd4f194",
+        "answers.parquet": "1752acb8e72cf9f2e01114834e284252723dad9b",
     },
 }
 EPISODES, AGENTVIEW_MP4, WRIST_MP4 = (

@@ -14,6 +14,8 @@ import yaml
 from hubserver import Hub
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
+from core.exam import EXAM_VERSION
+
 TOKEN = "hf_not_a_real_token_4f8a"
 
 
@@ -99,7 +101,7 @@ def test_a_second_push_moves_the_tag_to_the_new_data(kind: str, tmp_path: Path) 
     extra = ["split=exam", "n=1"] if kind == "exam" else ["n=2"]
     first = make_dataset(tmp_path / "first", *extra, "image_size=32", "seed=1")
     second = make_dataset(tmp_path / "second", *extra, "image_size=32", "seed=2")
-    tag = "exam-v1" if kind == "exam" else "v3.0"
+    tag = f"exam-v{EXAM_VERSION}" if kind == "exam" else "v3.0"
     with Hub() as hub:
         assert _push(hub, first, "repo_id=lab/again").returncode == 0
         result = _push(hub, second, "repo_id=lab/again")
@@ -136,6 +138,6 @@ def test_exams_push_with_their_own_tag(exam: Path) -> None:
         result = _push(hub, exam, "repo_id=lab/object-exam", "branch=v1")
         assert result.returncode == 0, result.stderr
         repo = hub.repos["lab/object-exam"]
-        assert set(repo.files) == {"exam.json", "trials.parquet", "README.md"}
-        assert "exam-v1" in repo.refs and "v1" in repo.refs
+        assert set(repo.files) == {"exam.json", "trials.parquet", "answers.parquet", "README.md"}
+        assert f"exam-v{EXAM_VERSION}" in repo.refs and "v1" in repo.refs  # the format's tag; the branch asked for
         assert "trials.parquet" in yaml.safe_load(repo.files["README.md"].decode().split("---")[1])["configs"][0]["data_files"]
