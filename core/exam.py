@@ -29,7 +29,8 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
   original_program (str), spec (JSON: the trial's full episode spec), scene_hash (str),
   alternatives (JSON: `[{"target", "program"}]`, the original first: what the instruction
   chooses among), slot (int: slot of the object asked for), value (str: what the instruction
-  calls it).
+  calls it), initial_ee (list[float]: the end effector's position in the initial state, which a
+  log's step 0 must show).
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
@@ -66,7 +67,7 @@ LANDING = 0.05  # closest approach (m) at which a rollout counts as landing on a
 PUBLIC_COLUMNS = ("row", "trial", "instruction", "occluded", "scene", "initial_state", "max_steps")
 ANSWER_COLUMNS = (
     "row", "face", "variant", "target", "program", "original_target", "original_program", "spec", "scene_hash",
-    "alternatives", "slot", "value",
+    "alternatives", "slot", "value", "initial_ee",
 )  # fmt: skip
 
 
@@ -98,7 +99,12 @@ def geometry() -> dict[str, dict[str, Any]]:
 
 
 def trial_rows(
-    trial: int, spec: EpisodeSpec, values_by_id: dict[str, str], initial_state: list[float], max_steps: int
+    trial: int,
+    spec: EpisodeSpec,
+    values_by_id: dict[str, str],
+    initial_state: list[float],
+    max_steps: int,
+    initial_ee: list[float],
 ) -> list[dict]:
     """The rollouts of one trial: task, a swap per alternative, occ, nonsense.
 
@@ -117,6 +123,7 @@ def trial_rows(
         "scene": spec.public().to_json(),
         "scene_hash": spec.scene_hash,
         "initial_state": initial_state,
+        "initial_ee": initial_ee,
         "max_steps": max_steps,
         "alternatives": json.dumps(alternatives),
     }

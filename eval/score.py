@@ -120,22 +120,26 @@ def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[s
         raise LogError(
             f"the logs hold row {int(twice.iloc[0])} more than once ({len(twice)} duplicated rows): one log per rollout"
         )
-    starts = {int(r["row"]): EpisodeSpec.from_json(r["spec"]) for _, r in exam.trials.iterrows()}
+    starts = {
+        int(r["row"]): (EpisodeSpec.from_json(r["spec"]), np.asarray(r["initial_ee"], float)) for _, r in exam.trials.iterrows()
+    }
     parsed = {}
     for _, log in logs.iterrows():
         ee = np.asarray([np.asarray(p, float) for p in log["ee"]]).reshape(-1, 3)
         objects = {k: np.asarray(v, float).reshape(-1, 3) for k, v in json.loads(log["objects"]).items()}
         if not len(ee) or any(len(v) != len(ee) for v in objects.values()):
             raise LogError(f"row {log['row']}: every object needs one position per end-effector position")
-        spec = starts.get(int(log["row"]))
-        for o in spec.objects if spec else ():
-            off = float(np.linalg.norm(objects[o.id][0] - o.pos)) if o.id in objects else float("inf")
-            if off > START_TOLERANCE:
-                where = "missing" if off == float("inf") else f"{off * 100:.1f} cm from where it starts"
-                raise LogError(
-                    f"row {log['row']}: step 0 is not the trial's recorded initial state ({o.id} is {where}); "
-                    "log step 0 before any action"
-                )
+        if int(log["row"]) in starts:
+            spec, hand = starts[int(log["row"])]
+            start = {"the end effector": (ee[0], hand), **{o.id: (objects.get(o.id, [None])[0], o.pos) for o in spec.objects}}
+            for name, (logged, recorded) in start.items():
+                off = float("inf") if logged is None else float(np.linalg.norm(np.asarray(logged) - recorded))
+                if off > START_TOLERANCE:
+                    where = "missing" if logged is None else f"{off * 100:.1f} cm from where it starts"
+                    raise LogError(
+                        f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}); "
+                        "log step 0 before any action"
+                    )
         error = log["error"] if isinstance(log["error"], str) else None
         located = log.get("located")
         guess = None if located is None or (np.ndim(located) == 0 and pd.isna(located)) else np.asarray(located, float)

@@ -68,9 +68,10 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
             raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
         producer.scene.reset(demo.spec)
         state = producer.scene.physics_state().astype(np.float64).tolist()
+        ee = [float(v) for v in producer.scene.ee_pos()]
         horizon = int(np.ceil(HORIZON_FACTOR * len(demo.actions))) + HORIZON_SLACK
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
-        rows += exam.trial_rows(i, demo.spec, values, state, horizon)
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee)
     return rows
 
 

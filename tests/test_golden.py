@@ -37,7 +37,7 @@ SHA256 = {  # first 40 hex digits of each file's sha256: the same on every machi
     },
     "exam": {  # exam format 2 (the answer key moved to answers.parquet; trials.parquet is the policy's side)
         "trials.parquet": "02194649cf3731a68b8af8e684385d5d5fd4f194",
-        "answers.parquet": "1752acb8e72cf9f2e01114834e284252723dad9b",
+        "answers.parquet": "0c66b7ffe12b7fcdfc9249e8e49469f0243735f5",
     },
 }
 EPISODES, AGENTVIEW_MP4, WRIST_MP4 = (

@@ -38,7 +38,8 @@ def _log(row: pd.Series, mode: str, located: list[float] | None = None) -> dict:
     objects = {k: np.stack([start[k], end[k]]) for k in start}
     point = contact_points(spec, objects, row["target"], row["program"])[1]
     lift = {"achieved": 0.0, "2cm": 0.01, "5cm": 0.035}
-    ee = [FAR, (point + [0.0, 0.0, lift[mode]]).tolist() if mode in lift else FAR]
+    start = list(row["initial_ee"])  # step 0: the hand where the trial starts
+    ee = [start, (point + [0.0, 0.0, lift[mode]]).tolist() if mode in lift else start]
     return {
         "row": int(row["row"]),
         "steps": 1,
@@ -132,6 +133,15 @@ def test_the_scorer_refuses_duplicated_rows_and_a_wrong_step_zero(exam: Exam, tm
     moved[first][0][0] += 0.03  # step 0 is not where the trial starts: a log from another state
     with pytest.raises(LogError, match=rf"row 2: step 0 is not the trial's recorded initial state \({first} is 3.0 cm"):
         score(exam, pd.DataFrame([*logs[:2], {**logs[2], "objects": json.dumps(moved)}, *logs[3:]]), "synthetic")
+    swap = next(i for i, f in enumerate(exam.trials["face"]) if f == "swap")
+    reached = _log(exam.trials.iloc[swap], "achieved")
+    without_step_0 = {
+        **reached,
+        "ee": reached["ee"][1:],
+        "objects": json.dumps({k: v[1:] for k, v in json.loads(reached["objects"]).items()}),
+    }
+    with pytest.raises(LogError, match=rf"row {swap}: step 0 is not the trial's recorded initial state \(the end effector is"):
+        score(exam, pd.DataFrame([*logs[:swap], without_step_0, *logs[swap + 1 :]]), "synthetic")
     path = tmp_path / "rollouts.parquet"
     pd.DataFrame([*logs, logs[0]]).to_parquet(path)
     result = subprocess.run(
