@@ -60,7 +60,8 @@ from core.success import Outcome, achieved
 from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline
 from gen.cli import UserError, main
 
-LEVELS = {"5cm": 0.05, "2cm": 0.02, "achieved": None}  # landing threshold (m), or None: the program achieved
+# landing threshold (m) of each level, or None: the program achieved
+LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}
 HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 POLICY_KEY = b"deconfound.policy"
 
@@ -152,7 +153,6 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
     distances: list[tuple[float, float]] = []
-    by_threshold: dict[float, dict[str, list[float]]] = {t: defaultdict(list) for t in REACH_THRESHOLDS}
     per_slot: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     per_object: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     grounding: list[tuple[float, int, float]] = []
@@ -184,10 +184,6 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             count("true_target", original, "5cm")
             count("swap_success", asked, "achieved")
             distances.append((judged[asked]["distance"], judged[original]["distance"]))
-            for t in REACH_THRESHOLDS:
-                land_t = None if error else landed(judged, t)
-                by_threshold[t]["obeyed_name"].append(land_t == asked)
-                by_threshold[t]["true_target"].append(land_t == original)
             if located is not None:
                 nearest = _nearest(EpisodeSpec.from_json(row["spec"]), objects, located)
                 grounding.append((float(nearest == row["target"]), trial, chance))
@@ -199,6 +195,11 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             per_object[str(row["value"])][main].append(float(ok))
         if not ok:
             probe[main][_probe(judged, asked)] += 1
+    level_of = {t: level for level, t in LEVELS.items()}
+    by_threshold = {
+        t: {name: [e["levels"][level_of[t]] for e in faces.get(name, [])] for name in ("obeyed_name", "true_target")}
+        for t in REACH_THRESHOLDS
+    }
     report = {
         "version": REPORT_VERSION,
         "policy": policy,
@@ -212,7 +213,9 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             "trusted": all(not any(e["init"] for e in v) for v in faces.values()),
         },
         "reach_probe": dict(probe),
-        "distances": _distances(distances, by_threshold, float(np.mean([e["chance"] for e in faces["obeyed_name"]] or [0.0]))),
+        "distances": _distances(
+            distances, by_threshold, float(np.mean([e["chance"] for e in faces.get("obeyed_name", [])] or [0.0]))
+        ),
         "per_slot": _rates(per_slot),
         "per_object": _rates(per_object),
         "errors": errors,
