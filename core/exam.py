@@ -50,6 +50,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from core import __version__, catalog, contact, parquet, success
+from core.layout import NATIVE
 from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
@@ -175,6 +176,11 @@ class Exam:
     @property
     def name(self) -> str:
         return f"{self.meta['referent']}-exam/seed{self.meta.get('seed', '?')}/{self.meta['trials']}trials"
+
+    @property
+    def profile(self) -> str:
+        """The feature layout the exam speaks (exam.json names it unless it is the native one)."""
+        return self.meta.get("profile", NATIVE.name)
 
     def spec(self, row: pd.Series) -> EpisodeSpec:
         return EpisodeSpec.from_json(row["spec"])

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import ExamError, read
+from core.layout import LIBERO
 from eval.policies import PolicyError
 from eval.registry import make
 from gen.cli import Failed, UserError, main
@@ -43,9 +44,10 @@ def evaluate(options: EvalOptions) -> None:
     policy_options = {} if options.keys == "dataset" else {"keys": options.keys}
     try:
         exam = read(options.exam)
-        profile = exam.meta.get("profile", "native")
-        if options.keys == "libero" and profile != "libero":
-            raise UserError(f"keys=libero sends LIBERO's features; this exam is profile {profile} (make it with profile=libero)")
+        if options.keys == LIBERO.name and exam.profile != LIBERO.name:
+            raise UserError(
+                f"keys=libero sends LIBERO's features; this exam is profile {exam.profile} (make it with profile=libero)"
+            )
         policy = make(options.policy, **policy_options)
     except (ExamError, PolicyError) as exc:
         raise UserError(str(exc)) from None
