@@ -20,7 +20,8 @@ $(STAMP): pyproject.toml constraints.txt scripts/system_libs.sh
 	bash scripts/system_libs.sh
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -c constraints.txt -e ".[lerobot,train,dev]"
+	$(BIN)/python -m pip install -q -c constraints.txt -e ".[lerobot,train,policies,dev]"
+	$(BIN)/python -m pip install -q --no-deps lerobot==0.4.4
 	touch $(STAMP)
 
 demo: $(STAMP)

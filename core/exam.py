@@ -50,7 +50,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from core import __version__, catalog, contact, parquet, success
-from core.layout import NATIVE
+from core.layout import ACTION_KEY, NATIVE, STATE_KEY, layout
 from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
@@ -181,6 +181,18 @@ class Exam:
     def profile(self) -> str:
         """The feature layout the exam speaks (exam.json names it unless it is the native one)."""
         return self.meta.get("profile", NATIVE.name)
+
+    @property
+    def features(self) -> dict[str, tuple[int, ...]]:
+        """Every observation key and the action, with the shape a policy receives or must
+        return ((H, W, 3) uint8 frames): what a checkpoint's features are checked against."""
+        features = layout(self.profile)
+        size = self.meta["observation"]["image_size"]
+        return {
+            **{key: (size, size, 3) for key in features.image_keys},
+            STATE_KEY: (features.state_size,),
+            ACTION_KEY: (features.action_size,),
+        }
 
     def spec(self, row: pd.Series) -> EpisodeSpec:
         return EpisodeSpec.from_json(row["spec"])

@@ -18,7 +18,7 @@ from pathlib import Path
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import ExamError, read
 from core.layout import LIBERO
-from eval.policies import PolicyError
+from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
 from gen.cli import Failed, UserError, main
 
@@ -31,6 +31,7 @@ class EvalOptions:
     rows: int | None = None  # take only the first N rollouts; default all
     workers: int = 1  # processes running rollouts (the logs are the same either way)
     keys: str = "dataset"  # remote policies: dataset (the exam's keys) | libero (what openpi's LIBERO client sends)
+    replan: int | None = None  # chunking policies (ckpt, remote): actions executed per predicted chunk; default theirs
 
 
 def evaluate(options: EvalOptions) -> None:
@@ -41,7 +42,11 @@ def evaluate(options: EvalOptions) -> None:
     from eval.battery import take  # the simulator stack loads only for valid input
     from eval.rollout import ProfileMismatch
 
+    if options.replan is not None and options.replan < 1:
+        raise UserError(f"replan must be at least 1, got {options.replan}")
     policy_options = {} if options.keys == "dataset" else {"keys": options.keys}
+    if options.replan is not None:
+        policy_options["replan"] = options.replan
     try:
         exam = read(options.exam)
         if options.keys == LIBERO.name and exam.profile != LIBERO.name:
@@ -55,7 +60,7 @@ def evaluate(options: EvalOptions) -> None:
     out = Path(options.out or Path("runs") / exam.root.name / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
     try:
         report, seconds = take(exam, rows, policy, out, options.workers, options.policy, policy_options=policy_options)
-    except ProfileMismatch as exc:
+    except (ProfileMismatch, FeatureMismatch) as exc:
         raise UserError(str(exc)) from None
     except OSError as exc:
         raise Failed(f"{type(exc).__name__}: {exc}") from None

@@ -55,6 +55,9 @@ def take(
     baseline's, measured on first use with `baseline`, not included). With workers > 1
     and a `policy_name`, contiguous chunks of rows run in processes that each rebuild the policy
     from its name and `policy_options` (eval/registry.py); the logs are the same either way."""
+    check = getattr(policy, "check", None)
+    if check is not None:  # a checkpoint that cannot read this exam stops here, before any rollout
+        check(exam.features)
     start = time.perf_counter()
     if workers > 1 and policy_name is not None:
         chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]

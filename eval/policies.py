@@ -7,6 +7,11 @@ The observation holds `observation.images.<camera>` (H, W, 3 uint8; all zeros on
 absent when the policy reads no images), `observation.state` (16 float32) and `task` (the
 instruction).
 
+A policy that knows which features it was trained on may have `check(features)`: the battery
+calls it once, before any rollout, with the exam's `{key: shape}` (`Exam.features`), and it
+raises FeatureMismatch naming the first key that does not fit, so a whole exam is not spent on
+a checkpoint that cannot read it.
+
 Reference policies validate the instrument and read the answer key in the context, which a
 learned policy must ignore:
 * `oracle` — plans the asked-for demonstration from the spec (the positive control; it reads
@@ -53,6 +58,22 @@ class Policy(Protocol):
 
 class PolicyError(RuntimeError):
     """A policy cannot be made or reached (e.g. its server is down); the message says why."""
+
+
+class FeatureMismatch(ValueError):
+    """A policy was trained on other features than the exam offers (camera names, state or
+    action size, frame size); the message names the mismatch."""
+
+
+def mismatch(expected: dict[str, tuple[int, ...]], offered: dict[str, tuple[int, ...]], who: str) -> str | None:
+    """The first feature `who` expects that the exam does not offer in that shape, in one line;
+    None when all fit."""
+    for key, shape in expected.items():
+        if key not in offered:
+            return f"{who} expects {key!r}, which this exam does not have (it has {', '.join(offered)})"
+        if tuple(shape) != tuple(offered[key]):
+            return f"{who} expects {key!r} of shape {tuple(shape)}, this exam's is {tuple(offered[key])}"
+    return None
 
 
 class Scripted:

@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from importlib.metadata import EntryPoint, entry_points
 
+from eval.lerobot_policy import LeRobotPolicy
 from eval.policies import Nothing, Oracle, Policy, PolicyError, Position, Random
 from eval.remote import RemotePolicy
 
@@ -86,3 +87,4 @@ register("position", Position)
 register("nothing", Nothing)
 register("random", Random)
 register("remote", RemotePolicy)
+register("lerobot", LeRobotPolicy)

@@ -4,7 +4,9 @@ datasets it cannot learn from (the experiment, not CI, proves the effect)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -15,6 +17,7 @@ import pytest
 from core.exam import read
 from core.layout import NATIVE
 from eval.battery import take
+from eval.policies import FeatureMismatch
 from eval.registry import make
 from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
@@ -45,6 +48,14 @@ def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
     report, _ = take(exam, exam.trials.head(2), make(f"ckpt:{checkpoint}"), tmp_path / "report")
     assert not report["errors"], report["errors"]
     assert report["faces"]["task"]["n"] == 1
+    policy, features = make(f"ckpt:{checkpoint}"), exam.features
+    for key, other in (("observation.images.agentview", (32, 32, 3)), ("observation.state", (8,)), ("action", (7,))):
+        with pytest.raises(FeatureMismatch, match=f"expects '{key}' of shape {re.escape(str(features[key]))}"):
+            policy.check({**features, key: other})
+    smaller = dataclasses.replace(exam, meta={**exam.meta, "observation": {**exam.meta["observation"], "image_size": 32}})
+    with pytest.raises(FeatureMismatch, match="of shape \\(64, 64, 3\\), this exam's is \\(32, 32, 3\\)"):
+        take(smaller, smaller.trials, policy, tmp_path / "refused")
+    assert not (tmp_path / "refused").exists()  # refused before any rollout
 
 
 def _synthetic(root: Path, tasks: list[str], cameras: tuple[str, ...] = ("agentview", "wrist"), size: int = 32) -> Path:

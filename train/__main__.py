@@ -19,6 +19,11 @@ def validate(cfg: TrainConfig) -> None:
     for name in ("steps", "batch_size", "chunk", "threads", "log_every", "save_every"):
         if getattr(cfg, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(cfg, name)}")
+    for name in ("warmup", "keep_every"):
+        if getattr(cfg, name) < 0:
+            raise UserError(f"{name} must be at least 0, got {getattr(cfg, name)}")
+    if not 0 <= cfg.lr_floor <= 1:
+        raise UserError(f"lr_floor is a fraction of the peak learning rate, between 0 and 1; got {cfg.lr_floor}")
     if cfg.lora.rank < 1:
         raise UserError(f"lora.rank must be at least 1, got {cfg.lora.rank}")
 

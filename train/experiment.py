@@ -1,17 +1,21 @@
 """The end-to-end experiment: does deconfounded data make a policy read its instruction?
 
-python -m train.experiment n=600 steps=3000 trials=30 image_size=96 out=runs/experiment
+python -m train.experiment n=900 steps=3000 trials=40 image_size=96 out=runs/experiment
 
 On the object axis: generate a confounded training set (`confound=position`: the target always
 in the canonical slot) and a deconfounded one of the same size, fine-tune the tiny policy on
 each (LoRA and full fine-tune), take the same held-out exam with every checkpoint, and write
-`docs/RESULTS.md` and `docs/results.json`. Every stage whose output already exists is reused,
+`docs/RESULTS.md`, `docs/results.json` and the training curves (`docs/training_curves.png`:
+loss, and obeyed-name on the exam's first `curve_trials` trials at a few kept checkpoints).
+Checkpoints whose trainable weights fit in `commit_mb` are copied to `docs/checkpoints/`, so
+the exam can be re-run without retraining. Every stage whose output already exists is reused,
 so a killed experiment continues where it stopped.
 """
 
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import time
 from dataclasses import asdict, dataclass, field
@@ -22,13 +26,18 @@ from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
 
 FINETUNES = ("lora", "full", "frozen")
+CURVES_PICTURE = "training_curves.png"
 
 
 @dataclass
 class ExperimentOptions:
-    n: int = 600  # episodes in each training set
+    n: int = 900  # episodes in each training set
     steps: int = 3000  # training steps per checkpoint
-    trials: int = 30  # trials in the held-out exam
+    trials: int = 40  # trials in the held-out exam
+    replan: int = 5  # actions of each predicted chunk executed before the policy looks again
+    curve_points: int = 3  # held-out evaluations per training run, for the curves (the last is the final model)
+    curve_trials: int = 10  # exam trials each curve point takes
+    commit_mb: float = 20.0  # checkpoints up to this size are copied to docs/checkpoints/
     image_size: int = 96  # camera frames in pixels, for the data, the exam and the policy
     out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
     seed: int = 0  # the training sets' seed (the exam's is seed + 1)
@@ -49,7 +58,13 @@ def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
 
 def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     """Every stage's generation config, validated before anything runs."""
-    for name in ("steps", "trials"):  # n and image_size are checked as `python -m gen` options of the same names
+    for name in (
+        "steps",
+        "trials",
+        "replan",
+        "curve_points",
+        "curve_trials",
+    ):  # n and image_size are checked as `python -m gen` options of the same names
         if getattr(options, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
     unknown = [f for f in options.finetunes if f not in FINETUNES]
@@ -62,7 +77,7 @@ def run(options: ExperimentOptions) -> dict:
     configs = _configs(options)
     from eval.battery import take  # the simulator and torch load only for valid input
     from gen.run import generate
-    from train.fit import LoraOptions, TrainConfig, fit
+    from train.fit import LoraOptions, TrainConfig, fit, snapshot_file
     from train.policy import MODEL_FILE, CheckpointPolicy
 
     root, stages = Path(options.out), _datasets(options)
@@ -76,14 +91,34 @@ def run(options: ExperimentOptions) -> dict:
         timings[f"generate {name}"] = time.perf_counter() - t
     exam_dir = stages["exam"][1]
     exam = read(exam_dir)
+    curve_rows = exam.trials[exam.trials["trial"] < options.curve_trials]
+    keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
+    policy_options = {"replan": options.replan}
+
+    def exam_report(weights: Path, rows, out: Path, baseline: bool = True) -> dict:  # noqa: ANN001
+        """The report of `weights` on `rows`, taken once and read back on later runs."""
+        if not (out / "report.json").is_file():
+            policy = CheckpointPolicy(str(weights), options.replan)
+            take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options=policy_options)
+        return json.loads((out / "report.json").read_text())
+
     rows = []
-    for name in ("confounded", "deconfounded"):
+    for name in ("deconfounded", "confounded"):  # the headline first, so a stopped run has it
         data = stages[name][1]
         for finetune in options.finetunes:
-            ckpt = root / "ckpt" / f"{name}-{finetune}"
-            cfg = TrainConfig(dataset=str(data), out=str(ckpt), finetune=finetune, steps=options.steps, lora=LoraOptions(16))
+            run_name = f"{name}-{finetune}"
+            ckpt = root / "ckpt" / run_name
+            cfg = TrainConfig(
+                dataset=str(data),
+                out=str(ckpt),
+                finetune=finetune,
+                steps=options.steps,
+                lora=LoraOptions(16),
+                keep_every=keep_every,
+            )
             commands.append(
-                f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} out={ckpt}"
+                f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
+                f"keep_every={keep_every} out={ckpt}"
             )
             t = time.perf_counter()
             if not (ckpt / MODEL_FILE).is_file():
@@ -91,16 +126,22 @@ def run(options: ExperimentOptions) -> dict:
                     fit(cfg)
                 except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
                     raise Failed(f"training {ckpt}: {exc}") from None
-            timings[f"train {name} {finetune}"] = time.perf_counter() - t
-            report_dir = root / "reports" / f"{name}-{finetune}"
-            commands.append(f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} workers=2 out={report_dir}")
+            timings[f"train {run_name}"] = time.perf_counter() - t
+            report_dir = root / "reports" / run_name
+            commands.append(
+                f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} replan={options.replan} workers=2 out={report_dir}"
+            )
             t = time.perf_counter()
-            if (report_dir / "report.json").is_file():
-                report = json.loads((report_dir / "report.json").read_text())
-            else:
-                report, _ = take(exam, exam.trials, CheckpointPolicy(str(ckpt)), report_dir, 2, f"ckpt:{ckpt}")
-            timings[f"eval {name} {finetune}"] = time.perf_counter() - t
+            report = exam_report(ckpt, exam.trials, report_dir)
+            timings[f"eval {run_name}"] = time.perf_counter() - t
+            t = time.perf_counter()
             train_log = json.loads((ckpt / "train.json").read_text())
+            curve = []
+            for step in [*range(keep_every, options.steps, keep_every or options.steps), options.steps]:
+                weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
+                point = exam_report(weights, curve_rows, root / "curves" / run_name / f"step-{step}", baseline=False)
+                curve.append({"step": step, "obeyed_name": _brief(point["faces"]["obeyed_name"])})
+            timings[f"curve {run_name}"] = time.perf_counter() - t
             rows.append(
                 {
                     "data": name,
@@ -112,12 +153,31 @@ def run(options: ExperimentOptions) -> dict:
                     "distances": report["distances"],
                     "final_loss": train_log["final_loss"],
                     "trainable_parameters": train_log["trainable_parameters"],
+                    "loss_curve": [(h["step"], round(h["loss"], 5)) for h in train_log["history"]],
+                    "heldout_curve": curve,
+                    "checkpoint": _commit(ckpt / MODEL_FILE, Path(options.docs) / "checkpoints" / run_name, options.commit_mb),
                 }
             )
     if rows:  # the measured shortcut on the same exam: what a position-reading policy scores
         rows.append({"data": None, "finetune": None, "policy": "position", "faces": report["baseline"]})
     timings_s = {k: round(v, 1) for k, v in timings.items()}
     return {"settings": asdict(options), "rows": rows, "commands": commands, "timings_s": timings_s}
+
+
+def _brief(face: dict) -> dict:
+    """A face's headline numbers: k, n, rate and its intervals."""
+    return {k: face[k] for k in ("k", "n", "rate", "ci", "ci_trials") if k in face}
+
+
+def _commit(model: Path, folder: Path, limit_mb: float) -> str | None:
+    """Copy a final checkpoint into the docs when it is small enough to commit; its path, or
+    None when it is not (a full fine-tune carries the whole text tower)."""
+    if model.stat().st_size > limit_mb * 1e6:
+        return None
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / model.name
+    shutil.copyfile(model, target)
+    return str(target)
 
 
 def _value(v: object) -> str:
@@ -145,19 +205,35 @@ def write_docs(results: dict, docs: Path) -> None:
         "is 1 / (objects in the scene), and the `position` row is the measured shortcut on the same exam. Obeyed name "
         "is given at three levels: landed within 5 cm, within 2 cm, achieved the program on the named object.",
         "",
-        "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | true target | occ | nonsense "
-        "| chance |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | grounded (first frame) "
+        "| true target | occ | nonsense | chance |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results["rows"]:
         f = r["faces"]
         levels = f["obeyed_name"].get("by_level") or {}
         by = [_cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
         who = (r["data"], r["finetune"]) if r["data"] else ("—", "`position` (shortcut)")
+        grounded = _cell(r["grounding"]) if "grounding" in r else "—"
         lines.append(
-            f"| {who[0]} | {who[1]} | {_cell(f['task'])} | {_cell(f['obeyed_name'])} | {by[0]} | {by[1]} "
+            f"| {who[0]} | {who[1]} | {_cell(f['task'])} | {_cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
             f"| {_cell(f['true_target'])} | {_cell(f['occ'])} | {_cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
         )
+    trained = [r for r in results["rows"] if r["data"]]
+    if trained:
+        plot_curves(trained, docs / CURVES_PICTURE)
+        lines += [
+            "",
+            f"![training curves]({CURVES_PICTURE})",
+            "",
+            f"Training curves: loss (left) and obeyed-name at 5 cm on the exam's first {s['curve_trials']} trials at "
+            "kept checkpoints (right; the last point is the final model).",
+            "",
+            "Final checkpoints committed (re-run the exam with `python -m eval policy=ckpt:<file> exam=<exam>`): "
+            + (", ".join(f"`{r['checkpoint']}`" for r in trained if r.get("checkpoint")) or "none")
+            + "; a checkpoint over "
+            f"{s['commit_mb']:g} MB (a full fine-tune carries the whole text tower) is not committed.",
+        ]
     lines += [
         "",
         "Commands, in order:",
@@ -171,6 +247,38 @@ def write_docs(results: dict, docs: Path) -> None:
     ]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
     (docs / "RESULTS.md").write_text("\n".join(lines) + "\n")
+
+
+def plot_curves(rows: list[dict], path: Path) -> None:
+    """Loss and held-out obeyed-name against training steps, one line per training run."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (loss_ax, obey_ax) = plt.subplots(1, 2, figsize=(10, 3.6))
+    for r in rows:
+        label = f"{r['data']} {r['finetune']}"
+        steps, losses = zip(*r["loss_curve"])
+        loss_ax.plot(steps, losses, label=label)
+        points = r["heldout_curve"]
+        rates = [p["obeyed_name"]["rate"] for p in points]
+        lo, hi = zip(*(p["obeyed_name"].get("ci_trials") or p["obeyed_name"]["ci"] for p in points))
+        x = [p["step"] for p in points]
+        obey_ax.errorbar(
+            x,
+            rates,
+            yerr=[[r - a for r, a in zip(rates, lo)], [b - r for r, b in zip(rates, hi)]],
+            marker="o",
+            capsize=3,
+            label=label,
+        )
+    loss_ax.set(xlabel="step", ylabel="training loss", yscale="log", title="loss")
+    obey_ax.set(xlabel="step", ylabel="obeyed name (5 cm)", ylim=(0, 1), title="held-out obeyed name")
+    loss_ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def experiment(options: ExperimentOptions) -> None:

@@ -7,11 +7,14 @@ looks where the instruction points, and an MLP predicts a chunk of actions.
 * Vision: per camera, four conv blocks over the image plus two coordinate channels, each block
   FiLM-modulated by the instruction embedding, ending in a spatial softmax that turns
   keypoint maps into image coordinates (where the named object is) and a pooled feature.
-* Head: keypoints, pooled features, normalised state and the instruction embedding -> MLP ->
-  `chunk` future actions (normalised with the dataset's stats).
-* Auxiliary head (training only): where the named object stands, from the same features. It
-  is supervised with the scene records and makes grounding the instruction in the image the
-  easiest way to lower the loss; at test time the policy sees only images, state and words.
+* Auxiliary head: where the named object stands, from the camera and instruction features. It
+  is supervised with the scene records (training only) and makes grounding the instruction in
+  the image the easiest way to lower the loss; at test time the policy sees only images, state
+  and words, and the battery reads this prediction as its motor-free grounding readout.
+* Head: keypoints, pooled features, the instruction embedding, normalised state and the
+  auxiliary head's prediction -> MLP -> `chunk` future actions (normalised with the dataset's
+  stats). Feeding the prediction in hands the head the target's position as three numbers
+  instead of leaving it to re-derive them from 32 keypoints per camera.
 """
 
 from __future__ import annotations
@@ -123,7 +126,7 @@ class TinyPolicy(nn.Module):
         width = sum(e.out_dim for e in self.cameras.values()) + STATE_DIM + 128
         self.locate = nn.Sequential(nn.Linear(width - STATE_DIM, 128), nn.ReLU(), nn.Linear(128, 3))
         self.head = nn.Sequential(
-            nn.Linear(width, config.hidden),
+            nn.Linear(width + 3, config.hidden),
             nn.ReLU(),
             nn.Linear(config.hidden, config.hidden),
             nn.ReLU(),
@@ -152,8 +155,9 @@ class TinyPolicy(nn.Module):
         if state_noise > 0:
             s = s + state_noise * torch.randn_like(s)
         seen = torch.cat([*feats, self.text_proj(text)], dim=1)
-        actions = self.head(torch.cat([seen, s], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
-        return actions, self.locate(seen)
+        located = self.locate(seen)
+        actions = self.head(torch.cat([seen, s, located], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
+        return actions, located
 
     @staticmethod
     def locate_target(position: torch.Tensor) -> torch.Tensor:

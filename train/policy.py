@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY
-from eval.policies import Context, PolicyError
+from eval.policies import Context, FeatureMismatch, PolicyError, mismatch
 
 if TYPE_CHECKING:
     from train.model import TinyPolicy
@@ -57,7 +57,10 @@ def load(path: Path | str) -> tuple[TinyPolicy, dict]:
         for key, name in ((STATE_KEY, "state"), (ACTION_KEY, "action"))
     }
     model = TinyPolicy(config, stats)
-    missing, unexpected = model.load_state_dict(weights, strict=False)
+    try:
+        missing, unexpected = model.load_state_dict(weights, strict=False)
+    except RuntimeError as exc:  # shapes from another version of the model
+        raise CheckpointError(f"{file} does not fit the model: {str(exc).splitlines()[-1].strip()}") from None
     if unexpected:
         raise CheckpointError(f"{file} does not fit the model: unexpected weights {unexpected[:3]}")
     model.eval()
@@ -83,6 +86,15 @@ class CheckpointPolicy:
         self.replan = min(replan, self.model.config.chunk)
         self._embeddings: dict[str, object] = {}
         self._queue: list[np.ndarray] = []
+
+    def check(self, features: dict[str, tuple[int, ...]]) -> None:
+        """Refuse an exam whose cameras, frame size, state or action are not this checkpoint's."""
+        size = self.model.config.image_size
+        expected = {NATIVE.image_key(c): (size, size, 3) for c in self.model.cameras}
+        expected |= {STATE_KEY: tuple(self.model.state_mean.shape), ACTION_KEY: tuple(self.model.action_mean.shape)}
+        problem = mismatch(expected, features, f"checkpoint {self.name.removeprefix('ckpt:')}")
+        if problem:
+            raise FeatureMismatch(problem)
 
     def reset(self, context: Context) -> None:
         self._queue = []

@@ -1,0 +1,85 @@
+"""A LeRobot checkpoint takes the exam (`policy=lerobot:<pretrained_model dir>`).
+
+Any `PreTrainedPolicy` that `lerobot-train` saved (ACT, Diffusion, SmolVLA, pi0, ...) is loaded
+with lerobot's own classes, and its saved pre- and post-processors (normalisation, tokenizer,
+device) run around it exactly as in `lerobot-eval`. The exam's observations already use the
+dataset's feature names and conventions (a `profile=libero` exam's frames and 8-d state are
+those of lerobot's LIBERO datasets), so they go in as the checkpoint saw them in training:
+frames as float (1, 3, H, W) in [0, 1], state as float32 (1, D), the instruction as `task`.
+The policy's own `select_action` keeps its action queue, so its chunking (`n_action_steps`,
+temporal ensembling) is the checkpoint's; `reset` clears it at each rollout.
+
+lerobot itself is imported only when such a policy is made; its features are checked against
+the exam's before any rollout (`check`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from core.layout import IMAGE_PREFIX, TASK_KEY
+from eval.policies import Context, FeatureMismatch, PolicyError, mismatch
+
+INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; README 'LeRobot checkpoints')"
+
+
+class LeRobotPolicy:
+    argument = "PATH"  # written lerobot:PATH (eval/registry.py): a pretrained_model folder
+    needs_images = True
+
+    def __init__(self, path: str, device: str = "cpu") -> None:
+        folder = Path(path)
+        if not (folder / "config.json").is_file():
+            raise PolicyError(f"{folder} is not a LeRobot checkpoint (no config.json; pass the pretrained_model folder)")
+        try:
+            import torch
+            from lerobot.configs.policies import PreTrainedConfig
+            from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+        except ImportError as exc:
+            raise PolicyError(f"policy lerobot needs lerobot: {exc}; {INSTALL}") from None
+        try:
+            config = PreTrainedConfig.from_pretrained(folder)
+            config.device = device
+            self.policy = get_policy_class(config.type).from_pretrained(folder, config=config)
+            self.preprocess, self.postprocess = make_pre_post_processors(
+                config, pretrained_path=str(folder), preprocessor_overrides={"device_processor": {"device": device}}
+            )
+        except Exception as exc:  # a folder lerobot cannot read: one line, not a traceback
+            raise PolicyError(f"{folder}: lerobot cannot load this checkpoint: {type(exc).__name__}: {exc}") from None
+        self.policy.eval()
+        self._torch = torch
+        self.name = f"lerobot:{path}"
+        self.config = config
+
+    def features(self) -> dict[str, tuple[int, ...]]:
+        """The checkpoint's features as the exam states them: frames (H, W, 3), state, action."""
+        expected = {}
+        for key, feature in self.config.input_features.items():
+            shape = tuple(feature.shape)
+            expected[key] = (shape[1], shape[2], shape[0]) if key.startswith(IMAGE_PREFIX) else shape
+        return expected | {key: tuple(f.shape) for key, f in self.config.output_features.items()}
+
+    def check(self, features: dict[str, tuple[int, ...]]) -> None:
+        problem = mismatch(self.features(), features, f"checkpoint {self.name.removeprefix('lerobot:')}")
+        if problem:
+            raise FeatureMismatch(problem)
+
+    def reset(self, context: Context) -> None:
+        self.policy.reset()
+        self.preprocess.reset()
+        self.postprocess.reset()
+
+    def act(self, observation: dict) -> np.ndarray:
+        torch = self._torch
+        batch: dict = {TASK_KEY: [str(observation[TASK_KEY])]}
+        for key in self.config.input_features:
+            value = np.asarray(observation[key])
+            if key.startswith(IMAGE_PREFIX):  # (H, W, 3) uint8 -> (1, 3, H, W) float in [0, 1], as lerobot-eval feeds it
+                batch[key] = torch.from_numpy(np.ascontiguousarray(value.transpose(2, 0, 1))).float()[None] / 255.0
+            else:
+                batch[key] = torch.from_numpy(value.astype(np.float32))[None]
+        with torch.inference_mode():
+            action = self.postprocess(self.policy.select_action(self.preprocess(batch)))
+        return action[0].cpu().numpy()

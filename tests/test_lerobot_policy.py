@@ -1,0 +1,103 @@
+"""A lab's LeRobot checkpoint takes the exam: lerobot's own `lerobot-train` fits ACT on a tiny
+generated dataset (CPU, a handful of steps, no pretrained backbone: nothing downloads), and the
+checkpoint it saves takes an exam trial through `policy=lerobot:`; checkpoints whose features do
+not match the exam's are refused before any rollout, with one line."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from core.exam import read
+from eval.policies import FeatureMismatch
+from eval.registry import make
+from helpers import make_dataset
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def act_checkpoint(object_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("act") / "run"
+    args = {
+        "dataset.repo_id": "local/object",
+        "dataset.root": object_dataset,
+        "policy.type": "act",
+        "policy.pretrained_backbone_weights": "null",  # ImageNet weights would be downloaded
+        "policy.device": "cpu",
+        "policy.push_to_hub": "false",
+        "policy.dim_model": 64,
+        "policy.dim_feedforward": 128,
+        "policy.chunk_size": 10,
+        "policy.n_action_steps": 10,
+        "steps": 2,
+        "batch_size": 2,
+        "num_workers": 0,
+        "save_freq": 2,
+        "eval_freq": 0,
+        "wandb.enable": "false",
+        "output_dir": out,
+    }
+    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    done = subprocess.run(
+        [str(Path(sys.executable).parent / "lerobot-train"), *(f"--{k}={v}" for k, v in args.items())],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=out.parent,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out / "checkpoints" / "000002" / "pretrained_model"
+
+
+@pytest.fixture(scope="module")
+def exam_64(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return make_dataset(tmp_path_factory.mktemp("exam") / "exam", "n=1", "split=exam", "image_size=64")
+
+
+def _eval(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "eval", *args], capture_output=True, text=True, cwd=ROOT)
+
+
+def test_a_lerobot_train_checkpoint_takes_an_exam_trial(act_checkpoint: Path, exam_64: Path, tmp_path: Path) -> None:
+    done = _eval(f"policy=lerobot:{act_checkpoint}", f"exam={exam_64}", "rows=1", f"out={tmp_path / 'report'}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads((tmp_path / "report" / "report.json").read_text())
+    assert not report["errors"], report["errors"]
+    assert report["faces"]["task"]["n"] == 1
+
+
+def test_a_checkpoint_with_other_cameras_is_refused_before_any_rollout(
+    act_checkpoint: Path, exam_64: Path, tmp_path: Path
+) -> None:
+    other = tmp_path / "renamed"
+    shutil.copytree(act_checkpoint, other)
+    config = other / "config.json"
+    config.write_text(config.read_text().replace("observation.images.wrist", "observation.images.front"))
+    done = _eval(f"policy=lerobot:{other}", f"exam={exam_64}", f"out={tmp_path / 'report'}")
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"error: checkpoint {other} expects 'observation.images.front', which this exam does not have "
+        "(it has observation.images.agentview, observation.images.wrist, observation.state, action)"
+    )
+    assert not (tmp_path / "report").exists()
+
+
+@pytest.mark.parametrize(
+    ("key", "other"), [("observation.state", (8,)), ("action", (7,)), ("observation.images.wrist", (32, 32, 3))]
+)
+def test_a_checkpoint_with_another_state_action_or_frame_size_is_refused(
+    act_checkpoint: Path, exam_64: Path, key: str, other: tuple[int, ...]
+) -> None:
+    policy = make(f"lerobot:{act_checkpoint}")
+    features = read(exam_64).features
+    policy.check(features)  # the exam it was trained for fits
+    with pytest.raises(FeatureMismatch) as refused:
+        policy.check({**features, key: other})
+    assert str(refused.value) == f"checkpoint {act_checkpoint} expects '{key}' of shape {features[key]}, this exam's is {other}"
