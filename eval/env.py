@@ -1,7 +1,7 @@
 """The exam as a gymnasium environment, for labs that roll out in their own loop.
 
     import gymnasium as gym
-    env = gym.make("eval.env:deconfound/Exam-v0", exam="datasets/object-exam", trial=3, face="swap", variant=1)
+    env = gym.make("deconfound_exam:deconfound/Exam-v0", exam="datasets/object-exam", trial=3, face="swap", variant=1)
     obs, info = env.reset()          # info["instruction"] is the rollout's instruction
     obs, reward, terminated, truncated, info = env.step(action)
 
@@ -14,6 +14,7 @@ runs the settle steps lerobot's LIBERO environment runs).
 horizon. `info` carries the instruction, the row, its horizon and the end-effector and object
 positions the offline scorer takes (`python -m eval.score`) — never the answer: what the row
 asks for stays in the exam's answers.parquet, which only the scorer (and this reward) reads.
+The id is registered by the `deconfound_exam` module (a name no lab's folder shadows).
 """
 
 from __future__ import annotations
@@ -112,5 +113,3 @@ class ExamEnv(gym.Env):
     def close(self) -> None:
         self.cameras.close()
 
-
-gym.register(id="deconfound/Exam-v0", entry_point="eval.env:ExamEnv")

@@ -199,7 +199,7 @@ def test_gym_environment_replays_a_trial(small_exam: Path) -> None:
     row = exam.trials[(exam.trials.trial == 1) & (exam.trials.face == "swap")].iloc[0]
     oracle = make("oracle")
     oracle.reset(Context(exam.spec(row), row["instruction"], row["target"], row["program"], 0))
-    env = gym.make("eval.env:deconfound/Exam-v0", exam=small_exam, row=int(row["row"]), disable_env_checker=True)
+    env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=small_exam, row=int(row["row"]), disable_env_checker=True)
     obs, info = env.reset()
     assert info["instruction"] == row["instruction"] and obs["observation.images.agentview"].shape == (64, 64, 3)
     reward = 0.0

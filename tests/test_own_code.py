@@ -42,7 +42,7 @@ def test_a_lab_policy_on_the_documented_env_takes_the_exam(tmp_path: Path) -> No
     for row in trials.itertuples():
         scene = json.loads(row.scene)
         assert scene["target"] == "" and scene["counterfactuals"] == [] and scene["instruction"] == ""
-        env = gym.make("eval.env:deconfound/Exam-v0", exam=str(root), row=row.row)
+        env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=str(root), row=row.row)
         obs, info = env.reset()
         assert not ANSWER & set(info) and info["instruction"] == row.instruction
         ee, objects = [info["ee"].tolist()], {k: [list(v)] for k, v in info["objects"].items()}
@@ -67,3 +67,35 @@ def test_a_lab_policy_on_the_documented_env_takes_the_exam(tmp_path: Path) -> No
     faces = json.loads((tmp_path / "report.json").read_text())["faces"]
     assert faces["obeyed_name"]["rate"] >= 0.8 and faces["true_target"]["rate"] <= 0.1  # it reads the instruction
     assert faces["nonsense"]["k"] == 0 and faces["task"]["k"] == 0  # it never lifts anything
+
+
+LAB_SCRIPT = """
+import gymnasium as gym
+{first}
+env = gym.make("deconfound_exam:deconfound/Exam-v0", exam={exam!r}, row=0)
+obs, info = env.reset()
+print(info["instruction"], sorted(obs))
+"""
+
+
+def test_the_env_is_made_from_a_lab_folder_whose_own_packages_share_our_names(tmp_path: Path) -> None:
+    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=32")
+    lab = tmp_path / "lab"
+    for package in ("eval", "core"):  # a lab's own packages, first on sys.path when it runs from its folder
+        (lab / package).mkdir(parents=True)
+        (lab / package / "__init__.py").write_text("LAB = True\n")
+
+    def run(first: str) -> subprocess.CompletedProcess[str]:
+        script = LAB_SCRIPT.format(first=first, exam=str(root))
+        return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=lab)
+
+    made = run("")
+    assert made.returncode == 0, made.stderr[-2000:]
+    instruction = pd.read_parquet(root / "trials.parquet").set_index("row").loc[0, "instruction"]
+    assert (
+        made.stdout.strip()
+        == f"{instruction} {sorted(['observation.images.agentview', 'observation.images.wrist', 'observation.state'])}"
+    )
+    clash = run("import eval")  # the lab's own eval imported first: one line naming both, not a mixed-up import
+    assert clash.returncode != 0
+    assert f"a package named 'eval' ({lab / 'eval' / '__init__.py'}) is already imported" in clash.stderr.strip().splitlines()[-1]
