@@ -112,4 +112,3 @@ class ExamEnv(gym.Env):
 
     def close(self) -> None:
         self.cameras.close()
-

@@ -84,6 +84,33 @@ class VideoFile:
         self._container.close()
 
 
+def cut(source: Path, first: int, length: int, fps: int, target: Path) -> int:
+    """Copy frames [first, first + length) of `source` into a new mp4 `target` starting at time 0,
+    without re-encoding (the inverse of `VideoFile.append`: episodes start on a keyframe, and
+    there are no B-frames, so the packets decode alone). Returns the frames copied."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    copied = 0
+    with av.open(str(source)) as src, av.open(str(target), "w", format="mp4") as dst:
+        in_stream = src.streams.video[0]
+        out_stream = dst.add_stream_from_template(in_stream)
+        out_stream.time_base = tb = in_stream.time_base
+        shift = int(Fraction(first, fps) / tb)
+        for packet in src.demux(in_stream):
+            if packet.dts is None or packet.pts is None:  # the demuxer's end-of-stream marker
+                continue
+            frame = int(round(packet.pts * tb * fps))
+            if frame < first:
+                continue
+            if frame >= first + length:
+                break
+            packet.pts -= shift
+            packet.dts -= shift
+            packet.stream = out_stream
+            dst.mux(packet)
+            copied += 1
+    return copied
+
+
 def video_info(codec: str, size: int, fps: int) -> dict[str, object]:
     """The `info` block lerobot keeps for each video feature in meta/info.json."""
     return {

@@ -1,0 +1,143 @@
+"""`python -m gen.export <dataset> format=v2.1 out=<dir>`: the same episodes as a LeRobot v2.1
+dataset, for openpi's trainer and lerobot releases before 0.4 (openpi pins a lerobot commit that
+reads v2.1 only).
+
+v2.1 keeps one parquet file and one mp4 per camera for each episode
+(`data/chunk-000/episode_000000.parquet`, `videos/chunk-000/<camera key>/episode_000000.mp4`)
+and its metadata as JSON lines (`meta/episodes.jsonl`, `meta/tasks.jsonl`,
+`meta/episodes_stats.jsonl`) beside `meta/info.json`. The rows are copied as they are; each
+episode's video packets are cut out of the v3.0 file without re-encoding, so the frames decode
+identically; the per-episode stats are v3.0's own. The export is written to a staging folder
+and moved into place when whole, so an interrupted export leaves nothing half-written.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from gen.check import Broken, check
+from gen.cli import Failed, UserError, main
+from gen.lerobot_reader import INFO_PATH, LeRobotReader
+from gen.video import cut
+
+FORMATS = ("v2.1",)
+CHUNKS_SIZE = 1000  # episodes per chunk folder, as lerobot v2.1 writes them
+DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"
+VIDEO_PATH = "videos/chunk-{episode_chunk:03d}/{video_key}/episode_{episode_index:06d}.mp4"
+V21_STATS = ("min", "max", "mean", "std", "count")  # v3.0 adds quantiles, which v2.1 readers do not expect
+
+
+@dataclass
+class ExportOptions:
+    dataset: str = ""  # a generated LeRobot v3.0 dataset
+    format: str = "v2.1"  # v2.1: per-episode files and JSON-lines metadata (openpi, lerobot < 0.4)
+    out: str = ""  # the new dataset's folder; must not exist unless overwrite=true
+    overwrite: bool = False  # replace an existing export at out (never the source dataset)
+
+
+def _stats(row: dict, features: list[str]) -> dict:
+    """An episode's v2.1 stats from its v3.0 episodes-table row (nested lists, as jsonl holds them)."""
+    out = {}
+    for key in features:
+        out[key] = {s: np.stack(_nested(row[f"stats/{key}/{s}"])).tolist() for s in V21_STATS if f"stats/{key}/{s}" in row}
+    return out
+
+
+def _nested(value: object) -> object:
+    """A parquet cell of arrays of arrays -> one numpy array."""
+    if isinstance(value, np.ndarray) and value.dtype == object:
+        return np.stack([_nested(v) for v in value])
+    return np.asarray(value)
+
+
+def export_v21(source: Path, staging: Path) -> dict:
+    """Write the v2.1 dataset of `source` into `staging`; returns its info.json."""
+    reader = LeRobotReader(source)
+    info, episodes = reader.info, reader.episodes
+    table = pq.read_table(source / "data").sort_by("index")
+    meta = staging / "meta"
+    meta.mkdir(parents=True)
+    stats_features = [k for k in info["features"] if f"stats/{k}/mean" in episodes.columns]
+    with (meta / "episodes.jsonl").open("w") as eps, (meta / "episodes_stats.jsonl").open("w") as stats:
+        for row in tqdm(episodes.to_dict("records"), desc="export v2.1", unit="episode"):
+            ep, chunk = int(row["episode_index"]), int(row["episode_index"]) // CHUNKS_SIZE
+            frames = table.filter(pc.equal(table["episode_index"], ep))
+            if len(frames) != int(row["length"]):
+                raise Failed(f"{source}: episode {ep} has {len(frames)} rows, its episodes row says {row['length']}")
+            path = staging / DATA_PATH.format(episode_chunk=chunk, episode_index=ep)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            pq.write_table(frames.replace_schema_metadata(None), path)
+            for camera, key in zip(reader.cameras, reader.video_keys):
+                span = reader.span(ep, camera, row)
+                target = staging / VIDEO_PATH.format(episode_chunk=chunk, video_key=key, episode_index=ep)
+                if cut(span.path, span.first, span.length, reader.fps, target) != span.length:
+                    raise Failed(f"{span.path}: episode {ep} does not hold {span.length} frames from frame {span.first}")
+            eps.write(json.dumps({"episode_index": ep, "tasks": list(row["tasks"]), "length": int(row["length"])}) + "\n")
+            stats.write(json.dumps({"episode_index": ep, "stats": _stats(row, stats_features)}) + "\n")
+    with (meta / "tasks.jsonl").open("w") as tasks:
+        for task, index in reader.tasks["task_index"].sort_values().items():
+            tasks.write(json.dumps({"task_index": int(index), "task": task}) + "\n")
+    for extra in ("scenes.parquet", "generation.json", "audit.json"):  # our own records travel along
+        if (source / "meta" / extra).is_file():
+            shutil.copy2(source / "meta" / extra, meta / extra)
+    n = len(episodes)
+    v21 = {
+        "codebase_version": "v2.1",
+        "robot_type": info.get("robot_type"),
+        "total_episodes": n,
+        "total_frames": info["total_frames"],
+        "total_tasks": info["total_tasks"],
+        "total_videos": n * len(reader.video_keys),
+        "total_chunks": (n + CHUNKS_SIZE - 1) // CHUNKS_SIZE,
+        "chunks_size": CHUNKS_SIZE,
+        "fps": info["fps"],
+        "splits": info["splits"],
+        "data_path": DATA_PATH,
+        "video_path": VIDEO_PATH,
+        "features": info["features"],
+    }
+    (staging / INFO_PATH).write_text(json.dumps(v21, indent=4))
+    return v21
+
+
+def export(options: ExportOptions) -> None:
+    if options.format not in FORMATS:
+        raise UserError(f"format must be one of {', '.join(FORMATS)}, got {options.format!r}")
+    if not options.out:
+        raise UserError("out=<dir> is required: where the exported dataset goes")
+    source, out = Path(options.dataset), Path(options.out)
+    if out.resolve() == source.resolve() or out.resolve().is_relative_to(source.resolve()):
+        raise UserError(f"out={out} is inside the source dataset {source}; export somewhere else")
+    if out.exists() and any(out.iterdir()) and not options.overwrite:
+        raise UserError(f"{out} exists and is not empty; pass overwrite=true to replace it")
+    try:
+        check(source)
+    except Broken as exc:
+        raise UserError(f"cannot export: {exc}") from None
+    staging = out.with_name(out.name + ".exporting")
+    shutil.rmtree(staging, ignore_errors=True)
+    try:
+        info = export_v21(source, staging)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    if out.exists():
+        shutil.rmtree(out)
+    staging.replace(out)
+    print(
+        f"wrote {out}: LeRobot {info['codebase_version']}, {info['total_episodes']} episodes, "
+        f"{info['total_frames']} frames, {info['total_videos']} videos"
+    )
+
+
+if __name__ == "__main__":
+    sys.exit(main("python -m gen.export", ExportOptions, export, doc=__doc__, positional="dataset"))
