@@ -32,6 +32,7 @@ class EvalOptions:
     workers: int = 1  # processes running rollouts (the logs are the same either way)
     keys: str = "dataset"  # remote policies: dataset (the exam's keys) | libero (what openpi's LIBERO client sends)
     replan: int | None = None  # chunking policies (ckpt, remote): actions executed per predicted chunk; default theirs
+    device: str | None = None  # lerobot checkpoints: the torch device to run on (default cpu)
 
 
 def evaluate(options: EvalOptions) -> None:
@@ -47,6 +48,8 @@ def evaluate(options: EvalOptions) -> None:
     policy_options = {} if options.keys == "dataset" else {"keys": options.keys}
     if options.replan is not None:
         policy_options["replan"] = options.replan
+    if options.device is not None:
+        policy_options["device"] = options.device
     try:
         exam = read(options.exam)
         if options.keys == LIBERO.name and exam.profile != LIBERO.name:

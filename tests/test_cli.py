@@ -96,6 +96,7 @@ ENTRY_POINTS = [
     ("gen.verify", True),
     ("gen.preview", True),
     ("gen.push", True),
+    ("gen.export", True),
     ("eval", False),
     ("eval.score", False),
     ("eval.serve", False),
