@@ -58,13 +58,8 @@ def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
 
 def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     """Every stage's generation config, validated before anything runs."""
-    for name in (
-        "steps",
-        "trials",
-        "replan",
-        "curve_points",
-        "curve_trials",
-    ):  # n and image_size are checked as `python -m gen` options of the same names
+    counts = ("steps", "trials", "replan", "curve_points", "curve_trials")  # n, image_size: checked by `python -m gen`
+    for name in counts:
         if getattr(options, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
     unknown = [f for f in options.finetunes if f not in FINETUNES]
