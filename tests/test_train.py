@@ -23,13 +23,14 @@ from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
 from gen.video import encode_episode
 from helpers import make_dataset
-from train.fit import TrainConfig, fit
+from train.fit import TrainConfig, fit, schedule, snapshot_file
 
 
 @pytest.fixture(scope="module")
 def checkpoint(object_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("ckpt")
-    fit(TrainConfig(dataset=str(object_dataset), out=str(out), steps=3, batch_size=4, save_every=2, log_every=1), progress=False)
+    cfg = TrainConfig(dataset=str(object_dataset), out=str(out), steps=3, batch_size=4, save_every=2, log_every=1, keep_every=2)
+    fit(cfg, progress=False)
     return out
 
 
@@ -37,10 +38,21 @@ def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_datas
     log = json.loads((checkpoint / "train.json").read_text())
     assert log["steps"] == 3 and np.isfinite(log["final_loss"]) and log["tasks"] == 4
     assert (checkpoint / "model.pt").is_file() and (checkpoint / "last.pt").is_file()
+    assert make(f"ckpt:{checkpoint / snapshot_file(2)}").model.config == make(f"ckpt:{checkpoint}").model.config  # kept at step 2
+    assert not (checkpoint / snapshot_file(3)).exists()  # the last step is model.pt itself
     lora_only = log["trainable_parameters"]
     assert 0 < lora_only < 5_000_000  # the text tower's 22.7M pretrained weights stay frozen under LoRA
     resumed = fit(TrainConfig(dataset=str(object_dataset), out=str(checkpoint), steps=5, batch_size=4, resume=True, log_every=1))
     assert [h["step"] for h in resumed["history"]] == [1, 2, 3, 4, 5]
+
+
+def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None:
+    cfg = TrainConfig(steps=1000, warmup=100, lr_floor=0.05)
+    rates = [schedule(cfg, step) for step in range(cfg.steps)]
+    assert rates[0] == pytest.approx(0.01) and rates[99] == pytest.approx(1.0)  # linear warm-up
+    assert all(a >= b for a, b in zip(rates[100:], rates[101:]))  # then never rises
+    assert rates[550] == pytest.approx(0.05 + 0.95 * 0.5)  # half-way down the cosine
+    assert schedule(cfg, cfg.steps) == pytest.approx(0.05)
 
 
 def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:

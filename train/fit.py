@@ -53,7 +53,7 @@ class TrainConfig:
     shift: int = 4  # random image shift, pixels
     warmup: int = 100  # steps of linear learning-rate warm-up
     lr_floor: float = 0.05  # the cosine schedule's last learning rate, as a fraction of the peak
-    state_noise: float = 0.1  # Gaussian noise on the normalised state, so vision must carry the plan (0.1 ~ 1 cm)
+    state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan (0.1 measured far worse)
     aux_weight: float = 1.0  # weight of the where-is-the-target loss (needs meta/scenes.parquet)
     seed: int = 0
     threads: int = 2

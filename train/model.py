@@ -13,8 +13,8 @@ looks where the instruction points, and an MLP predicts a chunk of actions.
   and words, and the battery reads this prediction as its motor-free grounding readout.
 * Head: keypoints, pooled features, the instruction embedding, normalised state and the
   auxiliary head's prediction -> MLP -> `chunk` future actions (normalised with the dataset's
-  stats). Feeding the prediction in hands the head the target's position as three numbers
-  instead of leaving it to re-derive them from 32 keypoints per camera.
+  stats). Feeding the prediction in (detached) hands the head the target's position as three
+  numbers instead of leaving it to re-derive them from 32 keypoints per camera.
 """
 
 from __future__ import annotations
@@ -156,7 +156,8 @@ class TinyPolicy(nn.Module):
             s = s + state_noise * torch.randn_like(s)
         seen = torch.cat([*feats, self.text_proj(text)], dim=1)
         located = self.locate(seen)
-        actions = self.head(torch.cat([seen, s, located], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
+        # detached: only the auxiliary loss shapes the prediction, so it stays a position the head can trust
+        actions = self.head(torch.cat([seen, s, located.detach()], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
         return actions, located
 
     @staticmethod
