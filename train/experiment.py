@@ -1,6 +1,6 @@
 """The end-to-end experiment: does deconfounded data make a policy read its instruction?
 
-python -m train.experiment n=900 steps=3000 trials=40 image_size=96 out=runs/experiment
+python -m train.experiment n=300 steps=3000 trials=40 image_size=96 out=runs/experiment
 
 On the object axis: generate a confounded training set (`confound=position`: the target always
 in the canonical slot) and a deconfounded one of the same size, fine-tune the tiny policy on
@@ -31,7 +31,7 @@ CURVES_PICTURE = "training_curves.png"
 
 @dataclass
 class ExperimentOptions:
-    n: int = 900  # episodes in each training set
+    n: int = 300  # episodes in each training set
     steps: int = 3000  # training steps per checkpoint
     trials: int = 40  # trials in the held-out exam
     replan: int = 5  # actions of each predicted chunk executed before the policy looks again

@@ -2,12 +2,13 @@
 
 Each step samples frames, shifts the images by a few pixels (augmentation), encodes each
 distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
-normalised actions, masked past the episode's end). The learning rate warms up over `warmup`
-steps and then follows a cosine to `lr_floor` of its peak at the last step: with a constant
-rate the loss was still falling at 3,000 steps and the landings scattered by a few cm. fp32 by default: with this project's torch
-(2.14.1, a CUDA build run on the CPU) bf16 autocast made a step ~15x slower here. A checkpoint
-(`last.pt`: weights, optimiser, step, random state) is written every `save_every` steps and at
-the end, so `resume=true` continues a killed run; `model.pt` is the final policy.
+normalised actions, masked past the episode's end). The learning rate can warm up over
+`warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step; the default
+(no warm-up, floor 1) keeps it constant, the recipe measured best so far (docs/RESULTS.md).
+fp32 by default: with this project's torch (2.14.1, a CUDA build run on the CPU) bf16 autocast
+made a step ~15x slower here. A checkpoint (`last.pt`: weights, optimiser, step, random state)
+is written every `save_every` steps and at the end, so `resume=true` continues a killed run;
+`model.pt` is the final policy.
 """
 
 from __future__ import annotations
@@ -51,9 +52,10 @@ class TrainConfig:
     chunk: int = 10
     image_size: int | None = None  # must equal the dataset's frames; default: the dataset's
     shift: int = 4  # random image shift, pixels
-    warmup: int = 100  # steps of linear learning-rate warm-up
-    lr_floor: float = 0.05  # the cosine schedule's last learning rate, as a fraction of the peak
-    state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan (0.1 measured far worse)
+    warmup: int = 0  # steps of linear learning-rate warm-up
+    lr_floor: float = 1.0  # the cosine schedule's last learning rate, as a fraction of the peak (1: constant)
+    feed_located: bool = False  # the action head also reads the auxiliary prediction (see train/model.py)
+    state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan
     aux_weight: float = 1.0  # weight of the where-is-the-target loss (needs meta/scenes.parquet)
     seed: int = 0
     threads: int = 2
@@ -67,7 +69,12 @@ class TrainConfig:
 def model_config(cfg: TrainConfig, image_size: int) -> ModelConfig:
     rank = cfg.lora.rank
     return ModelConfig(
-        image_size=image_size, chunk=cfg.chunk, finetune=cfg.finetune, lora_rank=rank, lora_alpha=cfg.lora.alpha or 2 * rank
+        image_size=image_size,
+        chunk=cfg.chunk,
+        finetune=cfg.finetune,
+        lora_rank=rank,
+        lora_alpha=cfg.lora.alpha or 2 * rank,
+        feed_located=cfg.feed_located,
     )
 
 

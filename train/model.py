@@ -11,10 +11,10 @@ looks where the instruction points, and an MLP predicts a chunk of actions.
   is supervised with the scene records (training only) and makes grounding the instruction in
   the image the easiest way to lower the loss; at test time the policy sees only images, state
   and words, and the battery reads this prediction as its motor-free grounding readout.
-* Head: keypoints, pooled features, the instruction embedding, normalised state and the
-  auxiliary head's prediction -> MLP -> `chunk` future actions (normalised with the dataset's
-  stats). Feeding the prediction in (detached) hands the head the target's position as three
-  numbers instead of leaving it to re-derive them from 32 keypoints per camera.
+* Head: keypoints, pooled features, the instruction embedding and normalised state -> MLP ->
+  `chunk` future actions (normalised with the dataset's stats). With `feed_located` it also
+  reads the auxiliary head's prediction (detached: only the auxiliary loss shapes it), three
+  numbers for the target's position; measured no better so far (docs/RESULTS.md), so off.
 """
 
 from __future__ import annotations
@@ -51,6 +51,7 @@ class ModelConfig:
     width: int = 64
     keypoints: int = 32
     hidden: int = 512
+    feed_located: bool = False  # the head also reads the auxiliary head's prediction (detached)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -126,7 +127,7 @@ class TinyPolicy(nn.Module):
         width = sum(e.out_dim for e in self.cameras.values()) + STATE_DIM + 128
         self.locate = nn.Sequential(nn.Linear(width - STATE_DIM, 128), nn.ReLU(), nn.Linear(128, 3))
         self.head = nn.Sequential(
-            nn.Linear(width + 3, config.hidden),
+            nn.Linear(width + (3 if config.feed_located else 0), config.hidden),
             nn.ReLU(),
             nn.Linear(config.hidden, config.hidden),
             nn.ReLU(),
@@ -156,8 +157,8 @@ class TinyPolicy(nn.Module):
             s = s + state_noise * torch.randn_like(s)
         seen = torch.cat([*feats, self.text_proj(text)], dim=1)
         located = self.locate(seen)
-        # detached: only the auxiliary loss shapes the prediction, so it stays a position the head can trust
-        actions = self.head(torch.cat([seen, s, located.detach()], dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
+        inputs = [seen, s, located.detach()] if self.config.feed_located else [seen, s]
+        actions = self.head(torch.cat(inputs, dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
         return actions, located
 
     @staticmethod
