@@ -27,6 +27,7 @@ from gen.config import GenConfig, parse
 
 FINETUNES = ("lora", "full", "frozen")
 CURVES_PICTURE = "training_curves.png"
+TRAINING_SETS = ("deconfounded", "confounded")  # the headline first, so a stopped run has it
 
 
 @dataclass
@@ -42,6 +43,7 @@ class ExperimentOptions:
     out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
     seed: int = 0  # the training sets' seed (the exam's is seed + 1)
     finetunes: list[str] = field(default_factory=lambda: ["lora", "full"])  # fine-tunes trained on each set: lora, full, frozen
+    data: list[str] = field(default_factory=lambda: list(TRAINING_SETS))  # the training sets fine-tuned on, in this order
     docs: str = "docs"  # where RESULTS.md and results.json go
 
 
@@ -62,6 +64,8 @@ def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     for name in counts:
         if getattr(options, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
+    if not options.data or any(d not in TRAINING_SETS for d in options.data):
+        raise UserError(f"data must be some of {', '.join(TRAINING_SETS)}, got {options.data}")
     unknown = [f for f in options.finetunes if f not in FINETUNES]
     if unknown or not options.finetunes:
         raise UserError(f"finetunes must be some of {', '.join(FINETUNES)}, got {options.finetunes}")
@@ -98,7 +102,7 @@ def run(options: ExperimentOptions) -> dict:
         return json.loads((out / "report.json").read_text())
 
     rows = []
-    for name in ("deconfounded", "confounded"):  # the headline first, so a stopped run has it
+    for name in options.data:
         data = stages[name][1]
         for finetune in options.finetunes:
             run_name = f"{name}-{finetune}"
