@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from core.layout import IMAGE_PREFIX, TASK_KEY
-from eval.policies import Context, FeatureMismatch, PolicyError, mismatch
+from eval.policies import Context, PolicyError, require_features
 
 INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; README 'LeRobot checkpoints')"
 
@@ -62,9 +62,7 @@ class LeRobotPolicy:
         return expected | {key: tuple(f.shape) for key, f in self.config.output_features.items()}
 
     def check(self, features: dict[str, tuple[int, ...]]) -> None:
-        problem = mismatch(self.features(), features, f"checkpoint {self.name.removeprefix('lerobot:')}")
-        if problem:
-            raise FeatureMismatch(problem)
+        require_features(self.features(), features, f"checkpoint {self.name.removeprefix('lerobot:')}")
 
     def reset(self, context: Context) -> None:
         self.policy.reset()

@@ -65,15 +65,14 @@ class FeatureMismatch(ValueError):
     action size, frame size); the message names the mismatch."""
 
 
-def mismatch(expected: dict[str, tuple[int, ...]], offered: dict[str, tuple[int, ...]], who: str) -> str | None:
-    """The first feature `who` expects that the exam does not offer in that shape, in one line;
-    None when all fit."""
+def require_features(expected: dict[str, tuple[int, ...]], offered: dict[str, tuple[int, ...]], who: str) -> None:
+    """Raise FeatureMismatch naming the first feature `who` expects that the exam does not offer
+    in that shape."""
     for key, shape in expected.items():
         if key not in offered:
-            return f"{who} expects {key!r}, which this exam does not have (it has {', '.join(offered)})"
+            raise FeatureMismatch(f"{who} expects {key!r}, which this exam does not have (it has {', '.join(offered)})")
         if tuple(shape) != tuple(offered[key]):
-            return f"{who} expects {key!r} of shape {tuple(shape)}, this exam's is {tuple(offered[key])}"
-    return None
+            raise FeatureMismatch(f"{who} expects {key!r} of shape {tuple(shape)}, this exam's is {tuple(offered[key])}")
 
 
 class Scripted:

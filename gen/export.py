@@ -70,9 +70,9 @@ def export_v21(source: Path, staging: Path) -> dict:
     with (meta / "episodes.jsonl").open("w") as eps, (meta / "episodes_stats.jsonl").open("w") as stats:
         for row in tqdm(episodes.to_dict("records"), desc="export v2.1", unit="episode"):
             ep, chunk = int(row["episode_index"]), int(row["episode_index"]) // CHUNKS_SIZE
-            frames = table.filter(pc.equal(table["episode_index"], ep))
-            if len(frames) != int(row["length"]):
-                raise Failed(f"{source}: episode {ep} has {len(frames)} rows, its episodes row says {row['length']}")
+            frames = table.slice(int(row["dataset_from_index"]), int(row["length"]))  # the table is in index order
+            if pc.any(pc.not_equal(frames["episode_index"], ep)).as_py() or len(frames) != int(row["length"]):
+                raise Failed(f"{source}: rows {row['dataset_from_index']}.. are not all of episode {ep}'s {row['length']}")
             path = staging / DATA_PATH.format(episode_chunk=chunk, episode_index=ep)
             path.parent.mkdir(parents=True, exist_ok=True)
             pq.write_table(frames.replace_schema_metadata(None), path)

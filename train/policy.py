@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY
-from eval.policies import Context, FeatureMismatch, PolicyError, mismatch
+from eval.policies import Context, PolicyError, require_features
 
 if TYPE_CHECKING:
     from train.model import TinyPolicy
@@ -92,9 +92,7 @@ class CheckpointPolicy:
         size = self.model.config.image_size
         expected = {NATIVE.image_key(c): (size, size, 3) for c in self.model.cameras}
         expected |= {STATE_KEY: tuple(self.model.state_mean.shape), ACTION_KEY: tuple(self.model.action_mean.shape)}
-        problem = mismatch(expected, features, f"checkpoint {self.name.removeprefix('ckpt:')}")
-        if problem:
-            raise FeatureMismatch(problem)
+        require_features(expected, features, f"checkpoint {self.name.removeprefix('ckpt:')}")
 
     def reset(self, context: Context) -> None:
         self._queue = []
