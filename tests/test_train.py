@@ -23,7 +23,7 @@ from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
 from gen.video import encode_episode
 from helpers import make_dataset
-from train.fit import TrainConfig, fit, schedule, snapshot_file
+from train.fit import TrainConfig, fit, kept_steps, schedule, snapshot_file
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +34,7 @@ def checkpoint(object_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -
     return out
 
 
-def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_dataset: Path) -> None:
+def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_dataset: Path, tmp_path: Path) -> None:
     log = json.loads((checkpoint / "train.json").read_text())
     assert log["steps"] == 3 and np.isfinite(log["final_loss"]) and log["tasks"] == 4
     assert (checkpoint / "model.pt").is_file() and (checkpoint / "last.pt").is_file()
@@ -44,6 +44,14 @@ def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_datas
     assert 0 < lora_only < 5_000_000  # the text tower's 22.7M pretrained weights stay frozen under LoRA
     resumed = fit(TrainConfig(dataset=str(object_dataset), out=str(checkpoint), steps=5, batch_size=4, resume=True, log_every=1))
     assert [h["step"] for h in resumed["history"]] == [1, 2, 3, 4, 5]
+    assert kept_steps(checkpoint, 5) == [2]  # the extended run keeps its shorter start's snapshot
+    import torch
+
+    # Extending a finished run is training longer (what `python -m train.experiment steps=` relies on).
+    straight = tmp_path / "straight"
+    fit(TrainConfig(dataset=str(object_dataset), out=str(straight), steps=5, batch_size=4, log_every=1), progress=False)
+    extended, direct = (torch.load(d / "model.pt", weights_only=False)["weights"] for d in (checkpoint, straight))
+    assert extended.keys() == direct.keys() and all(torch.equal(extended[k], direct[k]) for k in direct)
 
 
 def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None:

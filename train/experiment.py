@@ -76,7 +76,7 @@ def run(options: ExperimentOptions) -> dict:
     configs = _configs(options)
     from eval.battery import take  # the simulator and torch load only for valid input
     from gen.run import generate
-    from train.fit import LoraOptions, TrainConfig, fit, snapshot_file
+    from train.fit import LoraOptions, TrainConfig, fit, kept_steps, snapshot_file
     from train.policy import MODEL_FILE, CheckpointPolicy
 
     root, stages = Path(options.out), _datasets(options)
@@ -114,19 +114,23 @@ def run(options: ExperimentOptions) -> dict:
                 steps=options.steps,
                 lora=LoraOptions(16),
                 keep_every=keep_every,
+                resume=True,
             )
             commands.append(
                 f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
                 f"keep_every={keep_every} out={ckpt}"
             )
             t = time.perf_counter()
-            if not (ckpt / MODEL_FILE).is_file():
-                try:
+            trained = _trained_steps(ckpt)
+            if trained is not None and trained > options.steps:
+                raise UserError(f"{ckpt} holds a {trained}-step run, more than steps={options.steps}; choose another out=")
+            if trained != options.steps:
+                try:  # a killed run, or a finished shorter one, continues from its last state
                     fit(cfg)
                 except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
                     raise Failed(f"training {ckpt}: {exc}") from None
             timings[f"train {run_name}"] = time.perf_counter() - t
-            report_dir = root / "reports" / run_name
+            report_dir = root / "reports" / run_name / f"step-{options.steps}"
             commands.append(
                 f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} replan={options.replan} workers=2 out={report_dir}"
             )
@@ -136,7 +140,7 @@ def run(options: ExperimentOptions) -> dict:
             t = time.perf_counter()
             train_log = json.loads((ckpt / "train.json").read_text())
             curve = []
-            for step in [*range(keep_every, options.steps, keep_every or options.steps), options.steps]:
+            for step in [*kept_steps(ckpt, options.steps), options.steps]:
                 weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
                 point = exam_report(weights, curve_rows, root / "curves" / run_name / f"step-{step}", baseline=False)
                 curve.append({"step": step, "obeyed_name": _brief(point["faces"]["obeyed_name"])})
@@ -161,6 +165,14 @@ def run(options: ExperimentOptions) -> dict:
         rows.append({"data": None, "finetune": None, "policy": "position", "faces": report["baseline"]})
     timings_s = {k: round(v, 1) for k, v in timings.items()}
     return {"settings": asdict(options), "rows": rows, "commands": commands, "timings_s": timings_s}
+
+
+def _trained_steps(ckpt: Path) -> int | None:
+    """The steps of the finished training run in `ckpt`, or None if none finished there."""
+    try:
+        return int(json.loads((ckpt / "train.json").read_text())["steps"])
+    except (OSError, ValueError, KeyError):
+        return None
 
 
 def _brief(face: dict) -> dict:

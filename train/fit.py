@@ -32,6 +32,13 @@ def snapshot_file(step: int) -> str:
     return f"step-{step}.pt"
 
 
+def kept_steps(out: Path, below: int) -> list[int]:
+    """The steps under `below` whose weights are kept in `out` (a run extended with resume=true
+    keeps those of its shorter start too)."""
+    found = (p.name.removeprefix("step-").removesuffix(".pt") for p in out.glob(snapshot_file("*")))
+    return sorted(step for step in map(int, filter(str.isdigit, found)) if step < below)
+
+
 @dataclass
 class LoraOptions:
     rank: int = 16
