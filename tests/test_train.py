@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
 from core.exam import read
 from core.layout import NATIVE
@@ -45,8 +46,6 @@ def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_datas
     resumed = fit(TrainConfig(dataset=str(object_dataset), out=str(checkpoint), steps=5, batch_size=4, resume=True, log_every=1))
     assert [h["step"] for h in resumed["history"]] == [1, 2, 3, 4, 5]
     assert kept_steps(checkpoint, 5) == [2]  # the extended run keeps its shorter start's snapshot
-    import torch
-
     # Extending a finished run is training longer (what `python -m train.experiment steps=` relies on).
     straight = tmp_path / "straight"
     fit(TrainConfig(dataset=str(object_dataset), out=str(straight), steps=5, batch_size=4, log_every=1), progress=False)

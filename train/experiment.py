@@ -38,7 +38,7 @@ class ExperimentOptions:
     steps: int = 6000  # training steps per checkpoint; raising it later extends finished runs
     trials: int = 40  # trials in the held-out exam
     replan: int = 5  # actions of each predicted chunk executed before the policy looks again
-    curve_points: int = 3  # held-out evaluations per training run, for the curves (the last is the final model)
+    curve_points: int = 3  # checkpoints kept per training run for the curves (the last is the final model)
     curve_trials: int = 10  # exam trials each curve point takes
     commit_mb: float = 20.0  # checkpoints up to this size are copied to docs/checkpoints/
     image_size: int = 96  # camera frames in pixels, for the data, the exam and the policy
