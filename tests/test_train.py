@@ -53,6 +53,25 @@ def test_training_writes_a_checkpoint_and_resumes(checkpoint: Path, object_datas
     assert extended.keys() == direct.keys() and all(torch.equal(extended[k], direct[k]) for k in direct)
 
 
+def test_a_cooled_run_extends_from_where_its_cool_down_began(object_dataset: Path, tmp_path: Path) -> None:
+    def train(out: Path, steps: int, **schedule: float) -> dict:
+        cfg = TrainConfig(dataset=str(object_dataset), out=str(out), steps=steps, batch_size=4, log_every=1, resume=True)
+        return fit(dataclasses.replace(cfg, **schedule), progress=False)
+
+    run = tmp_path / "run"
+    train(run, 3)  # a constant learning rate, then two cool-downs of 2 steps
+    train(run, 5, decay=2, lr_floor=0.1)
+    cooled = train(run, 7, decay=2, lr_floor=0.1)  # last.pt (step 5) cooled too early: stable.pt (step 3) is taken
+    rates = [round(h["lr"] / cooled["config"]["lr"], 3) for h in cooled["history"]]
+    assert rates == [1.0] * 6 + [0.55]
+    straight = train(tmp_path / "straight", 7, decay=2, lr_floor=0.1)
+    assert straight["history"] == cooled["history"]
+    extended, direct = (torch.load(d / "model.pt", weights_only=False)["weights"] for d in (run, tmp_path / "straight"))
+    assert all(torch.equal(extended[k], direct[k]) for k in direct)
+    with pytest.raises(ValueError, match="another learning-rate schedule"):
+        train(run, 9, lr_floor=0.5)  # a cosine over every step: no saved state had its learning rates
+
+
 def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None:
     cfg = TrainConfig(steps=1000, warmup=100, lr_floor=0.05)
     rates = [schedule(cfg, step) for step in range(cfg.steps)]
@@ -60,6 +79,8 @@ def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None
     assert all(a >= b for a, b in zip(rates[100:], rates[101:]))  # then never rises
     assert rates[550] == pytest.approx(0.05 + 0.95 * 0.5)  # half-way down the cosine
     assert schedule(cfg, cfg.steps) == pytest.approx(0.05)
+    cool = TrainConfig(steps=1000, decay=200, lr_floor=0.0)  # constant, then a cool-down
+    assert [schedule(cool, step) for step in (0, 800, 900)] == pytest.approx([1.0, 1.0, 0.5])
 
 
 def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:

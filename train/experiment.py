@@ -1,6 +1,6 @@
 """The end-to-end experiment: does deconfounded data make a policy read its instruction?
 
-python -m train.experiment n=300 steps=6000 trials=40 image_size=96 out=runs/experiment
+python -m train.experiment n=300 steps=9000 decay=3000 lr_floor=0.05 trials=40 image_size=96 out=runs/experiment
 
 On the object axis: generate a confounded training set (`confound=position`: the target always
 in the canonical slot) and a deconfounded one of the same size, fine-tune the tiny policy on
@@ -9,13 +9,16 @@ every checkpoint, and write `docs/RESULTS.md`, `docs/results.json` and the train
 (`docs/training_curves.png`: loss, and obeyed-name on the exam's first `curve_trials` trials at
 the kept checkpoints).
 Checkpoints whose trainable weights fit in `commit_mb` are copied to `docs/checkpoints/`, so
-the exam can be re-run without retraining. Every stage whose output already exists is reused,
-so a killed experiment continues where it stopped, and a larger `steps=` continues finished
-training runs (the same as training that long from the start: tests/test_train.py).
+the exam can be re-run without retraining. Every stage whose output already exists is reused
+(a report while the weights it was taken with are unchanged), so a killed experiment continues
+where it stopped, and a larger `steps=` continues finished training runs from their last state
+before the cool-down (the same as training that long from the start: tests/test_train.py).
+`train=false` writes the docs from the finished runs alone.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 import sys
@@ -29,13 +32,17 @@ from gen.config import GenConfig, parse
 
 FINETUNES = ("lora", "full", "frozen")
 CURVES_PICTURE = "training_curves.png"
+WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights it was taken with
+TIMINGS = "timings.json"  # in `out`: each stage's wall time, summed over every invocation that did its work
 TRAINING_SETS = ("deconfounded", "confounded")  # the headline first, so a stopped run has it
 
 
 @dataclass
 class ExperimentOptions:
     n: int = 300  # episodes in each training set
-    steps: int = 6000  # training steps per checkpoint; raising it later extends finished runs
+    steps: int = 9000  # training steps per checkpoint; raising it later extends finished runs
+    decay: int = 3000  # the last this many steps cool the learning rate down to lr_floor of its peak (0: none)
+    lr_floor: float = 0.05  # 1: a constant learning rate
     trials: int = 40  # trials in the held-out exam
     replan: int = 5  # actions of each predicted chunk executed before the policy looks again
     curve_points: int = 3  # checkpoints kept per training run for the curves (the last is the final model)
@@ -44,11 +51,12 @@ class ExperimentOptions:
     image_size: int = 96  # camera frames in pixels, for the data, the exam and the policy
     out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
     seed: int = 0  # the training sets' seed (the exam's is seed + 1)
-    # Fine-tunes trained on each set (lora, full, frozen). LoRA alone keeps the run near 1.5 h on 2 cores;
-    # adding full (~50 min per 6000-step run, estimated) takes it past 3 h.
+    # Fine-tunes trained on each set (lora, full, frozen). LoRA alone keeps the run near 2.5 h on 2 cores;
+    # adding full (~75 min per 9000-step run) takes it past 3 h.
     finetunes: list[str] = field(default_factory=lambda: ["lora"])
     data: list[str] = field(default_factory=lambda: list(TRAINING_SETS))  # the training sets fine-tuned on, in this order
     docs: str = "docs"  # where RESULTS.md and results.json go
+    train: bool = True  # false: no training; runs not finished in out= are listed as not run
 
 
 def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
@@ -85,27 +93,40 @@ def run(options: ExperimentOptions) -> dict:
 
     root, stages = Path(options.out), _datasets(options)
     commands: list[str] = []
-    timings: dict[str, float] = {}
+    ledger = root / TIMINGS
+    spent: dict[str, float] = json.loads(ledger.read_text()) if ledger.is_file() else {}
+
+    def spend(stage: str, start: float) -> None:
+        """Add the work a stage did since `start` to its wall time over every invocation."""
+        spent[stage] = round(spent.get(stage, 0.0) + time.perf_counter() - start, 1)
+        ledger.write_text(json.dumps(spent, indent=2))
+
     for name, (args, out) in stages.items():
         commands.append("python -m gen " + " ".join(args) + f" out={out}")
-        t = time.perf_counter()
         if not (out / "meta").is_dir() and not (out / "exam.json").is_file():
+            t = time.perf_counter()
             generate(configs[name])
-        timings[f"generate {name}"] = time.perf_counter() - t
+            spend(f"generate {name}", t)
     exam_dir = stages["exam"][1]
     exam = read(exam_dir)
     curve_rows = exam.trials[exam.trials["trial"] < options.curve_trials]
     keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
     policy_options = {"replan": options.replan}
 
-    def exam_report(weights: Path, rows, out: Path, baseline: bool = True) -> dict:  # noqa: ANN001
-        """The report of `weights` on `rows`, taken once and read back on later runs."""
-        if not (out / "report.json").is_file():
+    def exam_report(weights: Path, rows, out: Path, stage: str, baseline: bool = True) -> dict:  # noqa: ANN001
+        """The report of `weights` on `rows`, taken once and read back on later runs while the
+        weights it was taken with (their digest, kept beside it) are still the ones there."""
+        digest = hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
+        stamp = out / WEIGHTS_DIGEST
+        if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
+            t = time.perf_counter()
             policy = CheckpointPolicy(str(weights), options.replan)
             take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options=policy_options)
+            stamp.write_text(digest)
+            spend(stage, t)
         return json.loads((out / "report.json").read_text())
 
-    rows = []
+    rows, not_run = [], []
     for name in options.data:
         data = stages[name][1]
         for finetune in options.finetunes:
@@ -116,39 +137,42 @@ def run(options: ExperimentOptions) -> dict:
                 out=str(ckpt),
                 finetune=finetune,
                 steps=options.steps,
+                decay=options.decay,
+                lr_floor=options.lr_floor,
                 lora=LoraOptions(16),
                 keep_every=keep_every,
                 resume=True,
             )
             commands.append(
                 f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
-                f"keep_every={keep_every} out={ckpt}"
+                f"decay={options.decay} lr_floor={options.lr_floor} keep_every={keep_every} out={ckpt}"
             )
-            t = time.perf_counter()
-            trained = _trained_steps(ckpt)
-            if trained is not None and trained > options.steps:
+            train_log = _train_log(ckpt)
+            trained = train_log["steps"] if train_log else 0
+            if trained > options.steps:
                 raise UserError(f"{ckpt} holds a {trained}-step run, more than steps={options.steps}; choose another out=")
-            if trained != options.steps:
-                try:  # a killed run, or a finished shorter one, continues from its last state
+            if train_log is None or _schedule(train_log["config"]) != _schedule(asdict(cfg)):
+                if not options.train:
+                    not_run.append(run_name)
+                    continue
+                t = time.perf_counter()
+                try:  # a killed run, or a finished shorter one, continues from its last matching state
                     fit(cfg)
                 except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
                     raise Failed(f"training {ckpt}: {exc}") from None
-            timings[f"train {run_name}"] = time.perf_counter() - t
+                spend(f"train {run_name}", t)
+                train_log = _train_log(ckpt)
             report_dir = root / "reports" / run_name / f"step-{options.steps}"
             commands.append(
                 f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} replan={options.replan} workers=2 out={report_dir}"
             )
-            t = time.perf_counter()
-            report = exam_report(ckpt, exam.trials, report_dir)
-            timings[f"eval {run_name}"] = time.perf_counter() - t
-            t = time.perf_counter()
-            train_log = json.loads((ckpt / "train.json").read_text())
+            report = exam_report(ckpt, exam.trials, report_dir, f"eval {run_name}")
             curve = []
             for step in [*kept_steps(ckpt, options.steps), options.steps]:
                 weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
-                point = exam_report(weights, curve_rows, root / "curves" / run_name / f"step-{step}", baseline=False)
+                point_dir = root / "curves" / run_name / f"step-{step}"
+                point = exam_report(weights, curve_rows, point_dir, f"curve {run_name}", baseline=False)
                 curve.append({"step": step, "obeyed_name": _brief(point["faces"]["obeyed_name"])})
-            timings[f"curve {run_name}"] = time.perf_counter() - t
             rows.append(
                 {
                     "data": name,
@@ -167,16 +191,21 @@ def run(options: ExperimentOptions) -> dict:
             )
     if rows:  # the measured shortcut on the same exam: what a position-reading policy scores
         rows.append({"data": None, "finetune": None, "policy": "position", "faces": report["baseline"]})
-    timings_s = {k: round(v, 1) for k, v in timings.items()}
-    return {"settings": asdict(options), "rows": rows, "commands": commands, "timings_s": timings_s}
+    return {"settings": asdict(options), "rows": rows, "not_run": not_run, "commands": commands, "timings_s": spent}
 
 
-def _trained_steps(ckpt: Path) -> int | None:
-    """The steps of the finished training run in `ckpt`, or None if none finished there."""
+def _train_log(ckpt: Path) -> dict | None:
+    """The log of the finished training run in `ckpt` (train/fit.py), or None if none finished there."""
     try:
-        return int(json.loads((ckpt / "train.json").read_text())["steps"])
-    except (OSError, ValueError, KeyError):
+        log = json.loads((ckpt / "train.json").read_text())
+        return log if isinstance(log.get("steps"), int) else None
+    except (OSError, ValueError, AttributeError):
         return None
+
+
+def _schedule(config: dict) -> tuple:
+    """What decides a run's learning rate at every step (runs logged before `decay` existed had none)."""
+    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay"))
 
 
 def _brief(face: dict) -> dict:
@@ -234,6 +263,8 @@ def write_docs(results: dict, docs: Path) -> None:
             f"| {who[0]} | {who[1]} | {_cell(f['task'])} | {_cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
             f"| {_cell(f['true_target'])} | {_cell(f['occ'])} | {_cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
         )
+    if results.get("not_run"):
+        lines += ["", f"Not run (no finished training in `{s['out']}`): {', '.join(results['not_run'])}."]
     trained = [r for r in results["rows"] if r["data"]]
     if trained:
         plot_curves(trained, docs / CURVES_PICTURE)
@@ -257,7 +288,7 @@ def write_docs(results: dict, docs: Path) -> None:
         *results["commands"],
         "```",
         "",
-        "Wall time per stage (s, this 2-core machine):",
+        "Wall time per stage (s, this 2-core machine, summed over the invocations that did its work):",
         "",
     ]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]

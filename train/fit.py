@@ -3,12 +3,14 @@
 Each step samples frames, shifts the images by a few pixels (augmentation), encodes each
 distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
 normalised actions, masked past the episode's end). The learning rate can warm up over
-`warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step; the default
-(no warm-up, floor 1) keeps it constant, the recipe measured best so far (docs/RESULTS.md).
+`warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step, over every
+step after the warm-up or, with `decay`, only the last `decay` steps (a constant rate, then a
+cool-down: the run can be extended and cooled again, see `resume`). Floor 1 keeps it constant.
 fp32 by default: with this project's torch (2.14.1, a CUDA build run on the CPU) bf16 autocast
 made a step ~15x slower here. A checkpoint (`last.pt`: weights, optimiser, step, random state)
-is written every `save_every` steps and at the end, so `resume=true` continues a killed run;
-`model.pt` is the final policy.
+is written every `save_every` steps, at the end, and as `stable.pt` where a cool-down begins, so
+`resume=true` continues a killed run, or extends a finished one from the latest of those states
+whose learning rates so far match this run's schedule; `model.pt` is the final policy.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from train.model import CAMERAS, ModelConfig, TinyPolicy
 from train.policy import MODEL_FILE, save
 
 LAST = "last.pt"
+STABLE = "stable.pt"  # the training state where the cool-down (`decay`) begins
 
 
 def snapshot_file(step: int) -> str:
@@ -32,7 +35,7 @@ def snapshot_file(step: int) -> str:
     return f"step-{step}.pt"
 
 
-def kept_steps(out: Path, below: int) -> list[int]:
+def kept_steps(out: Path, below: float = float("inf")) -> list[int]:
     """The steps under `below` whose weights are kept in `out` (a run extended with resume=true
     keeps those of its shorter start too)."""
     found = (p.name.removeprefix("step-").removesuffix(".pt") for p in out.glob(snapshot_file("*")))
@@ -61,6 +64,7 @@ class TrainConfig:
     shift: int = 4  # random image shift, pixels
     warmup: int = 0  # steps of linear learning-rate warm-up
     lr_floor: float = 1.0  # the cosine schedule's last learning rate, as a fraction of the peak (1: constant)
+    decay: int = 0  # the cosine spans only the last this many steps (a cool-down); 0: every step after warm-up
     feed_located: bool = False  # the action head also reads the auxiliary prediction (see train/model.py)
     state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan
     aux_weight: float = 1.0  # weight of the where-is-the-target loss (needs meta/scenes.parquet)
@@ -85,12 +89,18 @@ def model_config(cfg: TrainConfig, image_size: int) -> ModelConfig:
     )
 
 
+def decay_start(cfg: TrainConfig) -> int:
+    """The step where the cosine begins."""
+    return max(cfg.warmup, cfg.steps - cfg.decay) if cfg.decay else cfg.warmup
+
+
 def schedule(cfg: TrainConfig, step: int) -> float:
-    """The learning rate at `step` as a fraction of its peak: linear warm-up, then a cosine to
-    `lr_floor` at the last step."""
+    """The learning rate at `step` as a fraction of its peak: linear warm-up, then constant until
+    `decay_start`, then a cosine to `lr_floor` at the last step."""
     if step < cfg.warmup:
         return (step + 1) / cfg.warmup
-    progress = (step - cfg.warmup) / max(1, cfg.steps - cfg.warmup)
+    begin = decay_start(cfg)
+    progress = max(0.0, step - begin) / max(1, cfg.steps - begin)
     return cfg.lr_floor + (1 - cfg.lr_floor) * 0.5 * (1 + np.cos(np.pi * min(1.0, progress)))
 
 
@@ -120,15 +130,18 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     optimizer = torch.optim.AdamW([{"params": other, "lr": cfg.lr}, {"params": text_params, "lr": text_lr}], weight_decay=1e-4)
     peaks = [cfg.lr, text_lr]
     step, history = 0, []
-    if cfg.resume and (out / LAST).is_file():
-        record = torch.load(out / LAST, map_location="cpu", weights_only=False)
-        if record["config"] != model.config.to_dict():
-            raise ValueError(f"resume=true but {out / LAST} was trained with another model config: {record['config']}")
+    record = _resumable(cfg, out, model.config.to_dict()) if cfg.resume else None
+    if record is not None:
         model.load_state_dict(record["weights"], strict=False)
         optimizer.load_state_dict(record["optimizer"])
         step, history = record["step"], record["history"]
         rng.bit_generator.state = record["rng"]
         torch.set_rng_state(record["torch_rng"])
+        for later in kept_steps(out):  # kept by a run this one replaces past `step`
+            if later > step:
+                (out / snapshot_file(later)).unlink()
+        if cfg.keep_every:  # the curve gains the point resumed from (where a finished shorter run ended)
+            save(out / snapshot_file(step), model, {"train": asdict(cfg), "step": step})
     frozen_text = None
     if cfg.finetune == "frozen":
         with torch.no_grad():
@@ -140,6 +153,8 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()
     while step < cfg.steps:
+        if cfg.decay and step == decay_start(cfg):  # where a longer run would branch off
+            _checkpoint(out / STABLE, model, optimizer, step, history, rng)
         index = rng.integers(0, len(frames), cfg.batch_size)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
         images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in CAMERAS}
@@ -172,7 +187,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             bar.set_postfix(loss=f"{history[-1]['loss']:.4f}")
             running = []
         if step % cfg.save_every == 0 or step == cfg.steps:
-            _checkpoint(out, model, optimizer, step, history, rng)
+            _checkpoint(out / LAST, model, optimizer, step, history, rng)
         if cfg.keep_every and step % cfg.keep_every == 0 and step < cfg.steps:
             save(out / snapshot_file(step), model, {"train": asdict(cfg), "step": step})
     bar.close()
@@ -192,11 +207,28 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     return summary
 
 
-def _checkpoint(out: Path, model: TinyPolicy, optimizer, step: int, history: list, rng: np.random.Generator) -> None:  # noqa: ANN001
+def _resumable(cfg: TrainConfig, out: Path, config: dict) -> dict | None:
+    """The latest saved state in `out` (last.pt, else stable.pt) that this run continues: the
+    same model, and every learning rate it logged is the one this run's schedule gives there."""
+    import torch
+
+    found = [out / name for name in (LAST, STABLE) if (out / name).is_file()]
+    for path in found:
+        record = torch.load(path, map_location="cpu", weights_only=False)
+        if record["config"] != config:
+            raise ValueError(f"resume=true but {path} was trained with another model config: {record['config']}")
+        if all(np.isclose(h["lr"], cfg.lr * schedule(cfg, h["step"] - 1), rtol=1e-9, atol=0) for h in record["history"]):
+            return record
+    if found:
+        raise ValueError(f"resume=true but {out} holds a run on another learning-rate schedule (lr, warmup, decay, lr_floor)")
+    return None
+
+
+def _checkpoint(path: Path, model: TinyPolicy, optimizer, step: int, history: list, rng: np.random.Generator) -> None:  # noqa: ANN001
     import torch
 
     save(
-        out / LAST,
+        path,
         model,
         {
             "optimizer": optimizer.state_dict(),
