@@ -124,3 +124,18 @@ def test_every_entry_point_has_help_and_refuses_unknown_options(command: str, po
     lines = bad.stderr.strip().splitlines()
     assert bad.returncode == 2 and len(lines) == 1 and "bogus_option" in lines[0], bad.stderr
     assert not any(cwd.iterdir()) and not any(folder.iterdir())
+
+
+@pytest.mark.parametrize("option", ["steps=0", "decay=-1", "lr_floor=2", "finetunes=[bogus]", "data=[]"])
+def test_the_experiment_refuses_bad_values_before_any_work(option: str, tmp_path: Path) -> None:
+    out = tmp_path / "experiment"
+    result = subprocess.run(
+        [sys.executable, "-m", "train.experiment", option, f"out={out}", f"docs={tmp_path / 'docs'}"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "egl"},
+        cwd=ROOT,
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode != 0 and len(lines) == 1 and option.split("=")[0] in lines[0], result.stderr
+    assert not any(tmp_path.iterdir())
