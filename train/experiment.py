@@ -52,7 +52,7 @@ class ExperimentOptions:
     out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
     seed: int = 0  # the training sets' seed (the exam's is seed + 1)
     # Fine-tunes trained on each set (lora, full, frozen). LoRA alone keeps the run near 2.5 h on 2 cores;
-    # adding full (~95 min per 9000-step run: 1.6 steps/s) takes it past 3 h.
+    # adding full (~75 min per 9000-step run: 2.0 steps/s) takes it past 3 h.
     finetunes: list[str] = field(default_factory=lambda: ["lora"])
     data: list[str] = field(default_factory=lambda: list(TRAINING_SETS))  # the training sets fine-tuned on, in this order
     docs: str = "docs"  # where RESULTS.md and results.json go
