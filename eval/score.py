@@ -35,7 +35,8 @@ report.json schema (version 2):
       threshold_robust (the verdict against chance is the same at both thresholds),
       to_named, to_original (each swap rollout's closest approach, metres),
       histogram: {edges, to_named, to_original} (counts per distance bin)}
-  per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value)
+  per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value, with both
+      intervals: {k, n, rate, ci, ci_trials})
   errors = [{row, error}] for rollouts that broke (they count as failures)
 """
 
@@ -153,8 +154,8 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
     distances: list[tuple[float, float]] = []
-    per_slot: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
-    per_object: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    per_slot: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))  # (ok, trial)
+    per_object: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))
     grounding: list[tuple[float, int, float]] = []
     errors = []
     for _, row in exam.trials.iterrows():
@@ -191,8 +192,8 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             ok = count(face, asked, "achieved")
         main = "obeyed_name" if face == "swap" else face
         if face in ("task", "swap"):
-            per_slot[str(row["slot"])][main].append(float(ok))
-            per_object[str(row["value"])][main].append(float(ok))
+            per_slot[str(row["slot"])][main].append((float(ok), trial))
+            per_object[str(row["value"])][main].append((float(ok), trial))
         if not ok:
             probe[main][_probe(judged, asked)] += 1
     level_of = {t: level for level, t in LEVELS.items()}
@@ -280,8 +281,9 @@ def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: flo
 
 
 def _rates(table: dict) -> dict:
+    """Per key and face, the rate of its (ok, trial) entries with both intervals."""
     return {
-        key: {face: Rate(sum(v), len(v)).to_dict() for face, v in faces.items()}
+        key: {face: _rate(*zip(*entries)) for face, entries in faces.items()}
         for key, faces in sorted(table.items(), key=lambda kv: (len(kv[0]), kv[0]))
     }
 

@@ -1,11 +1,10 @@
 """`python -m train dataset=<dir> policy=tiny lora.rank=16 steps=3000 out=<ckpt>`: fine-tune the
-tiny policy on a generated dataset (see train/fit.py); `python -m eval policy=ckpt:<out>` then
-takes an exam with it."""
+tiny policy on a generated dataset, or on the union of several (`'dataset=[<dir>,<dir>]'`; see
+train/fit.py); `python -m eval policy=ckpt:<out>` then takes an exam with it."""
 
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from gen.cli import UserError, main
 from train.fit import TrainConfig
@@ -34,7 +33,7 @@ def train(cfg: TrainConfig) -> None:
     from train.fit import fit
 
     try:
-        data.check(Path(cfg.dataset), cfg.image_size)
+        data.check_all(data.roots(cfg.dataset), cfg.image_size)
         summary = fit(cfg)
     except ValueError as exc:  # the dataset (data.DatasetError) or resume=true over another model config
         raise UserError(str(exc)) from None

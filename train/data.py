@@ -1,9 +1,12 @@
-"""A generated LeRobot dataset in memory, for training on a CPU.
+"""Generated LeRobot datasets in memory, for training on a CPU: one, or the union of several
+(what lerobot users know as a multi-dataset).
 
 Videos are decoded once (PyAV, sequentially) into uint8 arrays and cached on disk, keyed by the
 dataset's content; decoding frame by frame through the loader would dominate every step.
-Everything a training run relies on is checked first, so a bad dataset fails in one line
-before any step is taken.
+Everything a training run relies on is checked first, so a bad dataset, or datasets that
+disagree on their features, rate or frame size, fail in one line before any step is taken.
+The union's normalisation statistics are computed over all its frames (exactly, from each
+dataset's own), and each frame remembers its dataset, so batches can be balanced across them.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ class Frames:
     ends: np.ndarray  # one past the last frame of each episode
     stats: dict[str, dict[str, np.ndarray]]
     target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
+    source: np.ndarray  # the dataset each frame comes from (index into `sources`)
+    sources: list[str]
 
     @property
     def image_size(self) -> int:
@@ -104,9 +109,97 @@ def _key(root: Path) -> str:
     return digest.hexdigest()[:20]
 
 
-def load(root: Path | str, image_size: int | None = None) -> Frames:
-    root = Path(root)
-    check(root, image_size)
+def roots(dataset: str | list[str] | tuple[str, ...]) -> list[Path]:
+    """`dataset=` as folders: one folder, or a list of them."""
+    folders = [dataset] if isinstance(dataset, (str, Path)) else list(dataset)
+    if not folders or not all(isinstance(f, (str, Path)) and str(f) for f in folders):
+        raise DatasetError(f"dataset must be a folder or a list of folders, got {dataset!r}")
+    if len(set(map(str, folders))) != len(folders):
+        raise DatasetError(f"dataset lists a folder twice: {folders}")
+    return [Path(f) for f in folders]
+
+
+def check_all(folders: list[Path], image_size: int | None = None) -> None:
+    """Each dataset trainable, and all of them alike in what one policy reads: features (names
+    and shapes), rate and frame size. The first disagreement is named in one line."""
+    infos = [check(root, image_size) for root in folders]
+    first = infos[0]
+    for root, info in zip(folders[1:], infos[1:]):
+        if info.get("fps") != first.get("fps"):
+            raise DatasetError(
+                f"{root} has fps {info.get('fps')}, {folders[0]} has {first.get('fps')}: one policy trains at one rate"
+            )
+        ours, base = info.get("features", {}), first.get("features", {})
+        for key in sorted(set(ours) | set(base)):
+            if key not in ours or key not in base:
+                has, lacks = (folders[0], root) if key in base else (root, folders[0])
+                raise DatasetError(f"{has} has feature {key!r} and {lacks} does not: the datasets must share their features")
+            if list(ours[key].get("shape", [])) != list(base[key].get("shape", [])):
+                what = "frame size" if ours[key].get("dtype") == "video" else "shape"
+                raise DatasetError(
+                    f"{root} feature {key!r} has {what} {ours[key]['shape']}, {folders[0]} has {base[key]['shape']}"
+                )
+            if ours[key].get("names") != base[key].get("names"):
+                raise DatasetError(
+                    f"{root} feature {key!r} names {ours[key].get('names')}, {folders[0]} {base[key].get('names')}"
+                )
+
+
+def load(dataset: str | Path | list[str], image_size: int | None = None) -> Frames:
+    """One dataset's frames, or the union of several (checked alike first)."""
+    folders = roots(str(dataset) if isinstance(dataset, Path) else dataset)
+    check_all(folders, image_size)
+    if len(folders) == 1:
+        return _load(folders[0])
+    return union([_load(root) for root in folders])
+
+
+def union(parts: list[Frames]) -> Frames:
+    """Several datasets as one: frames, episodes and tasks renumbered, statistics over all frames."""
+    tasks = list(dict.fromkeys(t for part in parts for t in part.tasks))
+    remap = [np.array([tasks.index(t) for t in part.tasks], np.int64) for part in parts]
+    frame_offsets = np.cumsum([0] + [len(p) for p in parts])
+    episode_offsets = np.cumsum([0] + [len(p.starts) for p in parts])
+    targets = [p.target for p in parts]
+    # one camera at a time, dropping each part's copy as it goes: the union costs half a copy more, not two
+    images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in CAMERAS}
+    return Frames(
+        images=images,
+        state=np.concatenate([p.state for p in parts]),
+        action=np.concatenate([p.action for p in parts]),
+        episode=np.concatenate([p.episode + off for p, off in zip(parts, episode_offsets)]),
+        task=np.concatenate([m[p.task] for p, m in zip(parts, remap)]),
+        tasks=tasks,
+        starts=np.concatenate([p.starts + off for p, off in zip(parts, frame_offsets)]),
+        ends=np.concatenate([p.ends + off for p, off in zip(parts, frame_offsets)]),
+        stats=_pooled({STATE_KEY: [p.state for p in parts], ACTION_KEY: [p.action for p in parts]}),
+        target=None if any(t is None for t in targets) else np.concatenate(targets),  # type: ignore[arg-type]
+        source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
+        sources=[s for p in parts for s in p.sources],
+    )
+
+
+def _pooled(vectors: dict[str, list[np.ndarray]]) -> dict[str, dict[str, np.ndarray]]:
+    """Mean, std, min and max over the frames of all the datasets together."""
+    out = {}
+    for key, parts in vectors.items():
+        every = np.concatenate(parts).astype(np.float64)
+        out[key] = {"mean": every.mean(0), "std": every.std(0), "min": every.min(0), "max": every.max(0)}
+    return out
+
+
+def sample(frames: Frames, rng: np.random.Generator, n: int, balance: bool) -> np.ndarray:
+    """`n` frame indices: uniform over all frames, or (`balance`) each from a dataset drawn
+    uniformly, so a small dataset weighs as much as a large one."""
+    if not balance or len(frames.sources) == 1:
+        return rng.integers(0, len(frames), n)
+    counts = np.bincount(frames.source, minlength=len(frames.sources))
+    offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    which = rng.integers(0, len(frames.sources), n)
+    return offsets[which] + (rng.random(n) * counts[which]).astype(np.int64)
+
+
+def _load(root: Path) -> Frames:
     dataset = LeRobotReader(root)
     data, episodes = dataset.data, dataset.episodes
     tasks = dataset.tasks.sort_values("task_index")
@@ -132,6 +225,8 @@ def load(root: Path | str, image_size: int | None = None) -> Frames:
         ends=episodes["dataset_to_index"].to_numpy(np.int64),
         stats=stats,
         target=_targets(root),
+        source=np.zeros(len(data), np.int64),
+        sources=[str(root)],
     )
 
 

@@ -18,9 +18,7 @@ before the cool-down (the same as training that long from the start: tests/test_
 
 from __future__ import annotations
 
-import hashlib
 import json
-import shutil
 import sys
 import time
 from dataclasses import asdict, dataclass, field
@@ -29,11 +27,10 @@ from pathlib import Path
 from core.exam import read
 from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
+from train.stages import Ledger, brief, cell, commit, exam_report, generate_once, schedule, train_log, value
 
 FINETUNES = ("lora", "full", "frozen")
 CURVES_PICTURE = "training_curves.png"
-WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights it was taken with
-TIMINGS = "timings.json"  # in `out`: each stage's wall time, summed over every invocation that did its work
 TRAINING_SETS = ("deconfounded", "confounded")  # the headline first, so a stopped run has it
 
 
@@ -90,45 +87,19 @@ def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
 
 def run(options: ExperimentOptions) -> dict:
     configs = _configs(options)
-    from eval.battery import take  # the simulator and torch load only for valid input
-    from gen.run import generate
-    from train.fit import LoraOptions, TrainConfig, fit, kept_steps, snapshot_file
-    from train.policy import MODEL_FILE, CheckpointPolicy
+    from train.fit import LoraOptions, TrainConfig, fit, kept_steps, snapshot_file  # torch loads only for valid input
+    from train.policy import MODEL_FILE
 
     root, stages = Path(options.out), _datasets(options)
     commands: list[str] = []
-    ledger = root / TIMINGS
-    spent: dict[str, float] = json.loads(ledger.read_text()) if ledger.is_file() else {}
-
-    def spend(stage: str, start: float) -> None:
-        """Add the work a stage did since `start` to its wall time over every invocation."""
-        spent[stage] = round(spent.get(stage, 0.0) + time.perf_counter() - start, 1)
-        ledger.write_text(json.dumps(spent, indent=2))
-
+    ledger = Ledger(root)
     for name, (args, out) in stages.items():
         commands.append("python -m gen " + " ".join(args) + f" out={out}")
-        if not (out / "meta").is_dir() and not (out / "exam.json").is_file():
-            t = time.perf_counter()
-            generate(configs[name])
-            spend(f"generate {name}", t)
+        generate_once(configs[name], ledger, f"generate {name}")
     exam_dir = stages["exam"][1]
     exam = read(exam_dir)
     curve_rows = exam.trials[exam.trials["trial"] < options.curve_trials]
     keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
-    policy_options = {"replan": options.replan}
-
-    def exam_report(weights: Path, rows, out: Path, stage: str, baseline: bool = True) -> dict:  # noqa: ANN001
-        """The report of `weights` on `rows`, taken once and read back on later runs while the
-        weights it was taken with (their digest, kept beside it) are still the ones there."""
-        digest = hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
-        stamp = out / WEIGHTS_DIGEST
-        if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
-            t = time.perf_counter()
-            policy = CheckpointPolicy(str(weights), options.replan)
-            take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options=policy_options)
-            stamp.write_text(digest)
-            spend(stage, t)
-        return json.loads((out / "report.json").read_text())
 
     rows, not_run = [], []
     for name in options.data:
@@ -151,11 +122,11 @@ def run(options: ExperimentOptions) -> dict:
                 f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
                 f"decay={options.decay} lr_floor={options.lr_floor} keep_every={keep_every} out={ckpt}"
             )
-            train_log = _train_log(ckpt)
-            trained = train_log["steps"] if train_log else 0
+            log = train_log(ckpt)
+            trained = log["steps"] if log else 0
             if trained > options.steps:
                 raise UserError(f"{ckpt} holds a {trained}-step run, more than steps={options.steps}; choose another out=")
-            if train_log is None or _schedule(train_log["config"]) != _schedule(asdict(cfg)):
+            if log is None or schedule(log["config"]) != schedule(asdict(cfg)):
                 if not options.train:
                     not_run.append(run_name)
                     continue
@@ -164,19 +135,19 @@ def run(options: ExperimentOptions) -> dict:
                     fit(cfg)
                 except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
                     raise Failed(f"training {ckpt}: {exc}") from None
-                spend(f"train {run_name}", t)
-                train_log = _train_log(ckpt)
+                ledger.spend(f"train {run_name}", t)
+                log = train_log(ckpt)
             report_dir = root / "reports" / run_name / f"step-{options.steps}"
             commands.append(
                 f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} replan={options.replan} workers=2 out={report_dir}"
             )
-            report = exam_report(ckpt, exam.trials, report_dir, f"eval {run_name}")
+            report = exam_report(exam, ckpt, exam.trials, report_dir, options.replan, ledger, f"eval {run_name}")
             curve = []
             for step in [*kept_steps(ckpt, options.steps), options.steps]:
                 weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
                 point_dir = root / "curves" / run_name / f"step-{step}"
-                point = exam_report(weights, curve_rows, point_dir, f"curve {run_name}", baseline=False)
-                curve.append({"step": step, "obeyed_name": _brief(point["faces"]["obeyed_name"])})
+                point = exam_report(exam, weights, curve_rows, point_dir, options.replan, ledger, f"curve {run_name}", False)
+                curve.append({"step": step, "obeyed_name": brief(point["faces"]["obeyed_name"])})
             rows.append(
                 {
                     "data": name,
@@ -186,57 +157,16 @@ def run(options: ExperimentOptions) -> dict:
                     "init_value_trusted": report["init_value"]["trusted"],
                     "reach_probe": report["reach_probe"],
                     "distances": report["distances"],
-                    "final_loss": train_log["final_loss"],
-                    "trainable_parameters": train_log["trainable_parameters"],
-                    "loss_curve": [(h["step"], round(h["loss"], 5)) for h in train_log["history"]],
+                    "final_loss": log["final_loss"],
+                    "trainable_parameters": log["trainable_parameters"],
+                    "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]],
                     "heldout_curve": curve,
-                    "checkpoint": _commit(ckpt / MODEL_FILE, Path(options.docs) / "checkpoints" / run_name, options.commit_mb),
+                    "checkpoint": commit(ckpt / MODEL_FILE, Path(options.docs) / "checkpoints" / run_name, options.commit_mb),
                 }
             )
     if rows:  # the measured shortcut on the same exam: what a position-reading policy scores
         rows.append({"data": None, "finetune": None, "policy": "position", "faces": report["baseline"]})
-    return {"settings": asdict(options), "rows": rows, "not_run": not_run, "commands": commands, "timings_s": spent}
-
-
-def _train_log(ckpt: Path) -> dict | None:
-    """The log of the finished training run in `ckpt` (train/fit.py), or None if none finished there."""
-    try:
-        log = json.loads((ckpt / "train.json").read_text())
-        return log if isinstance(log.get("steps"), int) else None
-    except (OSError, ValueError, AttributeError):
-        return None
-
-
-def _schedule(config: dict) -> tuple:
-    """What decides a run's learning rate at every step (runs logged before `decay` existed had none)."""
-    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay"))
-
-
-def _brief(face: dict) -> dict:
-    """A face's headline numbers: k, n, rate and its intervals."""
-    return {k: face[k] for k in ("k", "n", "rate", "ci", "ci_trials") if k in face}
-
-
-def _commit(model: Path, folder: Path, limit_mb: float) -> str | None:
-    """Copy a final checkpoint into the docs when it is small enough to commit; its path, or
-    None when it is not (a full fine-tune carries the whole text tower)."""
-    if model.stat().st_size > limit_mb * 1e6:
-        return None
-    folder.mkdir(parents=True, exist_ok=True)
-    target = folder / model.name
-    shutil.copyfile(model, target)
-    return str(target)
-
-
-def _value(v: object) -> str:
-    """An option's value as it is written on the command line."""
-    return f"[{','.join(map(str, v))}]" if isinstance(v, list) else str(v)
-
-
-def _cell(face: dict) -> str:
-    """Rate (k/n; the trial-resampled 95% interval, else Wilson's)."""
-    lo, hi = face.get("ci_trials") or face["ci"]
-    return f"{face['rate']:.1%} ({face['k']}/{face['n']}; {lo:.0%}–{hi:.0%})"
+    return {"settings": asdict(options), "rows": rows, "not_run": not_run, "commands": commands, "timings_s": ledger.spent}
 
 
 def write_docs(results: dict, docs: Path) -> None:
@@ -246,7 +176,7 @@ def write_docs(results: dict, docs: Path) -> None:
     lines = [
         "# Results: deconfounded data x low-rank update, object axis",
         "",
-        f"Generated by `python -m train.experiment` ({', '.join(f'{k}={_value(v)}' for k, v in s.items())}). "
+        f"Generated by `python -m train.experiment` ({', '.join(f'{k}={value(v)}' for k, v in s.items())}). "
         f"Training sets: {s['n']} oracle demonstrations each at {s['image_size']} px; the held-out exam has "
         f"{s['trials']} trials (task, a swap for every other object, occ, nonsense). Rates carry k/n and a 95% "
         "interval that resamples whole trials (a trial's rollouts share its scene); chance for obeyed-name/true-target "
@@ -260,12 +190,12 @@ def write_docs(results: dict, docs: Path) -> None:
     for r in results["rows"]:
         f = r["faces"]
         levels = f["obeyed_name"].get("by_level") or {}
-        by = [_cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
+        by = [cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
         who = (r["data"], r["finetune"]) if r["data"] else ("—", "`position` (shortcut)")
-        grounded = _cell(r["grounding"]) if "grounding" in r else "—"
+        grounded = cell(r["grounding"]) if "grounding" in r else "—"
         lines.append(
-            f"| {who[0]} | {who[1]} | {_cell(f['task'])} | {_cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
-            f"| {_cell(f['true_target'])} | {_cell(f['occ'])} | {_cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
+            f"| {who[0]} | {who[1]} | {cell(f['task'])} | {cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
+            f"| {cell(f['true_target'])} | {cell(f['occ'])} | {cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
         )
     if results.get("not_run"):
         lines += ["", f"Not run (no finished training in `{s['out']}`): {', '.join(results['not_run'])}."]

@@ -1,6 +1,8 @@
-"""Fitting the tiny policy to a generated dataset: behaviour cloning of action chunks.
+"""Fitting the tiny policy to a generated dataset, or to the union of several (train/data.py):
+behaviour cloning of action chunks.
 
-Each step samples frames, shifts the images by a few pixels (augmentation), encodes each
+Each step samples frames (with several datasets, from each equally often unless
+`balance=false`), shifts the images by a few pixels (augmentation), encodes each
 distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
 normalised actions, masked past the episode's end). The learning rate can warm up over
 `warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step, over every
@@ -19,6 +21,7 @@ import json
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -50,7 +53,8 @@ class LoraOptions:
 
 @dataclass
 class TrainConfig:
-    dataset: str = "datasets/object"
+    dataset: Any = "datasets/object"  # a dataset folder, or several: 'dataset=[a,b]' trains one policy on their union
+    balance: bool = True  # with several datasets, each batch draws its frames from them equally
     out: str = "runs/train/tiny"
     policy: str = "tiny"
     finetune: str = "lora"  # lora | full | frozen
@@ -155,7 +159,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     while step < cfg.steps:
         if cfg.decay and step == decay_start(cfg):  # where a longer run would branch off
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
-        index = rng.integers(0, len(frames), cfg.batch_size)
+        index = data.sample(frames, rng, cfg.batch_size, cfg.balance)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
         images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in CAMERAS}
         state = torch.from_numpy(frames.state[index])

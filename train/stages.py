@@ -1,0 +1,122 @@
+"""What the experiments (train/experiment.py, train/axes.py) are built from: stages that are done
+once and reused, so a killed experiment continues where it stopped and its parts can run in
+different sittings.
+
+* a dataset or exam is generated only if its folder holds none;
+* a training run continues from its last matching state (`resume=true`, train/fit.py) and is
+  skipped when finished on the same schedule;
+* an exam report is taken once, and read back while the weights it was taken with (their
+  digest, kept beside it) are still the ones there;
+* each stage's wall time is summed over every invocation that did its work (`timings.json`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from core.exam import Exam
+from gen.config import GenConfig
+
+WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights it was taken with
+TIMINGS = "timings.json"  # in an experiment's `out`: each stage's wall time
+
+
+class Ledger:
+    """Wall time per stage, summed over every invocation that did the stage's work."""
+
+    def __init__(self, root: Path) -> None:
+        self.path = root / TIMINGS
+        self.spent: dict[str, float] = json.loads(self.path.read_text()) if self.path.is_file() else {}
+
+    def spend(self, stage: str, start: float) -> None:
+        """Add the work `stage` did since `start` (a `time.perf_counter()` reading)."""
+        self.spent[stage] = round(self.spent.get(stage, 0.0) + time.perf_counter() - start, 1)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.path.write_text(json.dumps(self.spent, indent=2))
+
+
+def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
+    """Generate `cfg`'s dataset or exam unless its folder already holds a finished one."""
+    from gen.run import generate
+
+    out = Path(str(cfg.out))
+    if (out / "meta").is_dir() or (out / "exam.json").is_file():
+        return
+    start = time.perf_counter()
+    generate(cfg)
+    ledger.spend(stage, start)
+
+
+def train_log(ckpt: Path) -> dict | None:
+    """The log of the finished training run in `ckpt` (train/fit.py), or None if none finished there."""
+    try:
+        log = json.loads((ckpt / "train.json").read_text())
+        return log if isinstance(log.get("steps"), int) else None
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def schedule(config: dict) -> tuple:
+    """What decides a run's learning rate at every step (runs logged before `decay` existed had none)."""
+    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay"))
+
+
+def exam_report(
+    exam: Exam,
+    weights: Path,
+    rows: pd.DataFrame,
+    out: Path,
+    replan: int,
+    ledger: Ledger,
+    stage: str,
+    baseline: bool = True,
+) -> dict:
+    """The report of the checkpoint `weights` on `rows` of `exam`, taken once and read back on
+    later runs while the weights it was taken with are still the ones there."""
+    from eval.battery import take
+    from train.policy import MODEL_FILE, CheckpointPolicy
+
+    digest = hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
+    stamp = out / WEIGHTS_DIGEST
+    if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
+        start = time.perf_counter()
+        policy = CheckpointPolicy(str(weights), replan)
+        take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options={"replan": replan})
+        stamp.write_text(digest)
+        ledger.spend(stage, start)
+    return json.loads((out / "report.json").read_text())
+
+
+def brief(face: dict) -> dict:
+    """A face's headline numbers: k, n, rate and its intervals."""
+    return {k: face[k] for k in ("k", "n", "rate", "ci", "ci_trials") if k in face}
+
+
+def commit(model: Path, folder: Path, limit_mb: float) -> str | None:
+    """Copy a final checkpoint into the docs when it is small enough to commit; its path, or
+    None when it is not (a full fine-tune carries the whole text tower)."""
+    if model.stat().st_size > limit_mb * 1e6:
+        return None
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / model.name
+    shutil.copyfile(model, target)
+    return str(target)
+
+
+def value(v: object) -> str:
+    """An option's value as it is written on the command line."""
+    return f"[{','.join(map(str, v))}]" if isinstance(v, list) else str(v)
+
+
+def cell(face: dict) -> str:
+    """Rate (k/n; the trial-resampled 95% interval, else Wilson's)."""
+    if not face.get("n"):
+        return "— (n=0)"
+    lo, hi = face.get("ci_trials") or face["ci"]
+    return f"{face['rate']:.1%} ({face['k']}/{face['n']}; {lo:.0%}–{hi:.0%})"
