@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any, List
 
 import gen.produce as produce
+from core import worlds
 from gen.cli import main
 from gen.config import GenConfig, validate
 from gen.lerobot_writer import Layout, LeRobotWriter
@@ -68,7 +69,8 @@ def run(cfg: GenConfig) -> float:
     """Time one profile; prints its table and returns its s/episode."""
     for clock in CLOCKS:
         CLOCKS[clock] = 0.0
-    ref, sim, n, size = load_referent(cfg), sim_settings(cfg), cfg.n, cfg.image_size
+    ref = load_referent(cfg)
+    sim, n, size = sim_settings(cfg, worlds.world(ref.config.world)), cfg.n, cfg.image_size
     producer = produce.Producer(ref, sim)
     producer.demonstrate(designs(ref, 1, seed=1)[0], 0, 1, max_attempts=10)  # warm-up: JIT caches, first scene
     plan = designs(ref, n, seed=0)

@@ -1,6 +1,7 @@
-"""The objects a scene can hold, with the geometry the planner needs before any simulation.
+"""The objects a native scene can hold, with the geometry the planner needs before any simulation.
 
-Each kind names one of robosuite's object models (built in oracle/scene.py). Extents are
+Each kind names one of robosuite's object models (built in oracle/scene.py); other worlds
+declare their own (core/worlds/), looked up by `core.worlds.kind(name, world)`. Extents are
 stored here (measured from the compiled meshes; tests check them against the model) so that
 planning stays pure: no simulator is imported to know where an object rests or how tall it is.
 """
@@ -28,11 +29,14 @@ class Kind:
     """A buildable object.
 
     `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
-    arguments; `size` is the extent (x, y, z) in the object's frame, `bottom` the height of its
-    lowest point below the body origin, and `grasp_axis` the object-frame axis ("x" or "y") the
-    fingers close along: the narrower one. Colorable kinds take their RGBA from the object's
-    `color` attribute. Destinations (plate, basket) are placed on, not grasped; `inner` is the
-    half-width of the area an object must land in.
+    arguments (`libero`: LIBERO's model file `params["xml"]`, core/worlds/libero.py); `size` is
+    the extent (x, y, z) in the object's resting frame (its model frame turned by `quat`),
+    `bottom` the height of its lowest point below the body origin, and `grasp_axis` the
+    resting-frame axis ("x" or "y") the fingers close along: the narrower one. Colorable kinds
+    take their RGBA from the object's `color` attribute. Destinations (plate, basket) are placed
+    on, not grasped; `inner` is the half-width of the area an object must land in, and a
+    container's `contain` box (centre offset from the body origin, half size) is the volume an
+    object's origin must be in to be in it (LIBERO's `In`).
     """
 
     name: str
@@ -43,6 +47,8 @@ class Kind:
     colorable: bool = False
     params: dict[str, Any] = field(default_factory=dict)
     inner: float = 0.0
+    quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # resting orientation (w, x, y, z) before the object's yaw
+    contain: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # (centre offset, half size)
 
     @property
     def height(self) -> float:
@@ -99,10 +105,3 @@ KINDS: dict[str, Kind] = {
         ),
     )
 }
-
-
-def kind(name: str) -> Kind:
-    try:
-        return KINDS[name]
-    except KeyError:
-        raise KeyError(f"unknown object kind {name!r}; known: {', '.join(sorted(KINDS))}") from None

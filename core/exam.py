@@ -49,7 +49,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from core import __version__, catalog, contact, parquet, success
+from core import __version__, contact, parquet, success, worlds
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, layout
 from core.spec import EpisodeSpec, SpecError
 
@@ -92,11 +92,16 @@ def scoring() -> dict[str, Any]:
     }
 
 
-def geometry() -> dict[str, dict[str, Any]]:
-    return {
-        k.name: {"size": list(k.size), "bottom": k.bottom, "grasp_depth": k.grasp_depth(), "inner": k.inner}
-        for k in catalog.KINDS.values()
-    }
+def geometry(world: str = "native") -> dict[str, dict[str, Any]]:
+    """Every object kind of the exam's world: what the scorer needs to judge a log without our simulator."""
+    out = {}
+    for k in worlds.world(world).kinds.values():
+        out[k.name] = {"size": list(k.size), "bottom": k.bottom, "grasp_depth": k.grasp_depth(), "inner": k.inner}
+        if k.contain is not None:
+            out[k.name]["contain"] = {"offset": list(k.contain[0]), "half_size": list(k.contain[1])}
+        if k.quat != (1.0, 0.0, 0.0, 0.0):
+            out[k.name]["rest_quat"] = list(k.quat)
+    return out
 
 
 def trial_rows(
@@ -154,7 +159,7 @@ def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
         "rollouts": len(rows),
         "faces": FACES,
         "scoring": scoring(),
-        "geometry": geometry(),
+        "geometry": geometry(meta.get("world", "native")),
         "created_with": {
             "generator": __version__,
             "mujoco": metadata.version("mujoco"),

@@ -10,15 +10,15 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
+from core import worlds
 from core.layout import NATIVE, FeatureLayout, layout
+from core.worlds.native import PANDA_HOME
 
 SPEC_VERSION = 1
-
-# The robot's joint-space home pose (robosuite's Panda init_qpos): every episode starts here.
-PANDA_HOME: tuple[float, ...] = (0.0, 0.19634954, 0.0, -2.61799388, 0.0, 2.94159265, 0.78539816)
 
 
 class SpecError(ValueError):
@@ -75,6 +75,7 @@ class SimSettings:
     cameras: tuple[str, ...] = NATIVE.camera_names
     robot_home: tuple[float, ...] = PANDA_HOME
     profile: str = NATIVE.name  # the feature layout: cameras, state, action and controller (core/layout.py)
+    world: str = "native"  # where the episode happens: arena, robot, cameras, object models (core/worlds/)
 
     def __post_init__(self) -> None:
         layout(self.profile)  # an unknown profile fails here, naming the known ones
@@ -131,6 +132,8 @@ class EpisodeSpec:
         d = asdict(self)
         if self.sim.profile == NATIVE.name:  # specs of the native profile keep the JSON (and hash) they always had
             del d["sim"]["profile"]
+        if self.sim.world == "native":  # and so do those of the native world
+            del d["sim"]["world"]
         return d
 
     def to_json(self) -> str:
@@ -154,8 +157,25 @@ class EpisodeSpec:
         return hashlib.sha256(json.dumps(scene, sort_keys=True).encode()).hexdigest()[:16]
 
     def scene_record(self) -> dict[str, Any]:
-        """The `scene` column of meta/scenes.parquet."""
-        return {"objects": [{**asdict(o), "pos": list(o.pos)} for o in self.objects]}
+        """The `scene` column of meta/scenes.parquet. Outside the native world every object also
+        carries the world's own name for it (`instance`, e.g. LIBERO's `alphabet_soup_1`) and
+        its orientation (`quat`, w x y z), and the record names the world and the robot's
+        starting joints (`robot`: arm and finger joint positions, in the model's joint order),
+        so the episode can be rebuilt in the world's own simulator."""
+        objects = [{**asdict(o), "pos": list(o.pos)} for o in self.objects]
+        if self.sim.world == "native":
+            return {"objects": objects}
+        world, seen = worlds.world(self.sim.world), {}
+        for record, obj in zip(objects, self.objects):
+            seen[obj.kind] = seen.get(obj.kind, -1) + 1
+            record["instance"] = world.body_name(obj.kind, seen[obj.kind])
+            record["quat"] = list(yaw_quat(obj.yaw, world.kind(obj.kind).quat))
+        fingers = world.finger_home
+        return {
+            "world": world.name,
+            "objects": objects,
+            "robot": {"arm": list(self.sim.robot_home), "fingers": [fingers, -fingers]},
+        }
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> EpisodeSpec:
@@ -194,6 +214,7 @@ class EpisodeSpec:
                     cameras=tuple(d["sim"]["cameras"]),
                     robot_home=tuple(float(v) for v in d["sim"]["robot_home"]),
                     profile=str(d["sim"].get("profile", NATIVE.name)),
+                    world=str(d["sim"].get("world", "native")),
                 ),
                 attempt=int(d["attempt"]),
                 split=str(d.get("split", "train")),
@@ -213,3 +234,21 @@ class EpisodeSpec:
         if not isinstance(data, dict):
             raise SpecError("episode spec must be a JSON object")
         return cls.from_dict(data)
+
+
+def yaw_quat(yaw: float, rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> tuple[float, float, float, float]:
+    """The orientation (w, x, y, z) of an object turned by `yaw` about the world's z from its
+    resting orientation `rest`."""
+    c, s = math.cos(yaw / 2), math.sin(yaw / 2)
+    w, x, y, z = rest
+    return (c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w)
+
+
+def yaw_of(quat: tuple[float, ...] | list[float], rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> float:
+    """The turn about the world's z that takes the resting orientation `rest` to `quat` (the
+    inverse of `yaw_quat`, for orientations that differ by such a turn)."""
+    w, x, y, z = quat
+    rw, rx, ry, rz = rest  # quat times the conjugate of rest
+    cw = w * rw + x * rx + y * ry + z * rz
+    cz = -w * rz - x * ry + y * rx + z * rw
+    return 2.0 * math.atan2(cz, cw)

@@ -9,6 +9,8 @@ scorer judges logged rollouts with the same predicates.
           by more than 2 cm, and no object was lifted.
 * place — the carried object (`params.object`) rests inside the target destination's footprint
           and is not held above it; the destination itself stayed put.
+* pick_place — the target ends inside the container `params.destination`: its origin in the
+          container's `contain` box (LIBERO's `In` predicate, as LIBERO-Object's goals use it).
 """
 
 from __future__ import annotations
@@ -17,13 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core import catalog
+from core import worlds
 from core.spec import EpisodeSpec
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
 PUSH_MARGIN = 0.05
 SLIDE_MAX_RISE = 0.02
 PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
+CONTAIN_FLOOR = 0.01  # LIBERO's `in_box` lowers the container box's floor by this much
 
 
 @dataclass(frozen=True)
@@ -55,8 +58,8 @@ def pushed(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
 
 def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     carried = spec.task.params["object"]
-    dest = catalog.kind(spec.object(destination).kind)
-    obj = catalog.kind(spec.object(carried).kind)
+    dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    obj = worlds.kind(spec.object(carried).kind, spec.sim.world)
     d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
     inside = bool(np.all(np.abs(o_end[:2] - d_end[:2]) <= dest.inner))
     dest_top = d_end[2] - dest.bottom + dest.height
@@ -65,7 +68,19 @@ def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     return inside and resting and dest_still
 
 
-PREDICATES = {"pick": lifted, "push": pushed, "place": placed}
+def contained(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
+    """LIBERO's `In(target, <container>_contain_region)`: the target's origin inside the box,
+    whose floor LIBERO lowers by 1 cm (envs/objects/site_object.py `in_box`)."""
+    container = spec.task.params["destination"]
+    kind = worlds.kind(spec.object(container).kind, spec.sim.world)
+    if kind.contain is None:
+        raise ValueError(f"{kind.name} is not a container (no contain box)")
+    offset, half = (np.asarray(v) for v in kind.contain)
+    d = np.asarray(outcome.end[target]) - (np.asarray(outcome.end[container]) + offset)
+    return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - CONTAIN_FLOOR < d[2] < half[2])
+
+
+PREDICATES = {"pick": lifted, "push": pushed, "place": placed, "pick_place": contained}
 
 
 def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:

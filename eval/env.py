@@ -67,7 +67,7 @@ class ExamEnv(gym.Env):
             }
         )
         self.action_space = spaces.Box(np.array(features.action_low, np.float32), np.array(features.action_high, np.float32))
-        self.scene = scene_for(self.episode.assets, self.episode.sim.profile)
+        self.scene = scene_for(self.episode.assets, self.episode.sim.profile, self.episode.sim.world)
         self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
         self._t = 0
         self._start: dict = {}

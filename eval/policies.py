@@ -16,7 +16,8 @@ Reference policies validate the instrument and read the answer key in the contex
 learned policy must ignore:
 * `oracle` — plans the asked-for demonstration from the spec (the positive control; it reads
   no camera, so blanking them cannot hurt it);
-* `position` — picks up whatever stands nearest the referent's canonical slot (the shortcut);
+* `position` — does what the referent's shortcut does: by default, picks up whatever stands
+  nearest the canonical slot (the shortcut a position-reading policy learns);
 * `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
 
 eval/registry.py makes them (and every other policy) by name.
@@ -32,7 +33,7 @@ import numpy as np
 
 import referents
 from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
-from core.spec import EpisodeSpec, TaskSpec
+from core.spec import EpisodeSpec
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,7 @@ class Context:
     target: str
     program: str
     seed: int
+    initial_state: np.ndarray | None = None  # the physics state the rollout starts from (None: the spec's poses)
 
 
 class Policy(Protocol):
@@ -86,17 +88,20 @@ class Scripted:
         self._t = 0
         self._planner: dict = {}
 
-    def _plan(self, spec: EpisodeSpec, demo) -> list[np.ndarray]:  # noqa: ANN001
+    def _plan(self, spec: EpisodeSpec, demo, context: Context) -> list[np.ndarray]:  # noqa: ANN001
+        """The demonstration from where the rollout will start: the trial's initial state after
+        the profile's settle steps."""
         from oracle.episode import demonstrate
         from oracle.ik import ArmIK
         from oracle.scene import Scene
 
         # a private scene: the runner's stays untouched
-        key = (spec.assets, spec.sim.profile)
+        key = (spec.assets, spec.sim.profile, spec.sim.world)
         if key not in self._planner:
-            self._planner[key] = (Scene(spec.assets, spec.sim.profile), ArmIK(np.asarray(spec.sim.robot_home)))
+            self._planner[key] = (Scene(*key), ArmIK(np.asarray(spec.sim.robot_home), spec.sim.world))
         scene, ik = self._planner[key]
-        return list(demonstrate(scene, ik, spec, demo).actions)
+        settle = spec.sim.layout.settle_steps
+        return list(demonstrate(scene, ik, spec, demo, context.initial_state, settle).actions)
 
     def act(self, observation: dict) -> np.ndarray | None:
         if self._t >= len(self._actions):
@@ -112,7 +117,7 @@ class Oracle(Scripted):
     def reset(self, context: Context) -> None:
         spec = context.spec
         asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
-        self._actions, self._t = self._plan(asked, referents.demo_of(spec.referent)), 0
+        self._actions, self._t = self._plan(asked, referents.demo_of(spec.referent), context), 0
 
 
 class Position(Scripted):
@@ -120,13 +125,10 @@ class Position(Scripted):
         super().__init__("position")
 
     def reset(self, context: Context) -> None:
-        spec = context.spec
-        layout = referents.load(spec.referent).config.layout
-        x, y = layout.slots[layout.canonical_slot]
-        nearest = min(spec.objects, key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
-        chosen = dataclasses.replace(spec, target=nearest.id, task=TaskSpec(program="pick"))
-
-        self._actions, self._t = self._plan(chosen, referents.pick_and_lift), 0
+        referent = referents.load(context.spec.referent)
+        chosen = referent.shortcut(context.spec)
+        plan = referents.pick_and_lift if chosen.task.program == "pick" else referent.demo
+        self._actions, self._t = self._plan(chosen, plan, context), 0
 
 
 class Nothing:

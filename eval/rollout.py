@@ -103,16 +103,17 @@ class Runner:
     def run(self, row: pd.Series) -> Log:
         spec = EpisodeSpec.from_json(row["spec"])
         log = Log(int(row["row"]))
-        context = Context(spec, str(row["instruction"]), str(row["target"]), str(row["program"]), seed=int(row["row"]))
+        start = np.asarray(row["initial_state"])
+        context = Context(spec, str(row["instruction"]), str(row["target"]), str(row["program"]), int(row["row"]), start)
         try:
             self.policy.reset(context)
         except Exception as exc:  # a broken policy fails its rollout, not the run
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
         features = spec.sim.layout
-        scene = scene_for(spec.assets, spec.sim.profile)
+        scene = scene_for(spec.assets, spec.sim.profile, spec.sim.world)
         scene.reset(spec)
-        scene.set_physics_state(np.asarray(row["initial_state"]))
+        scene.set_physics_state(start)
         cameras = self.cameras(scene, spec)
         log.record(scene)
         for _ in range(features.settle_steps):  # as the profile's own environment starts a rollout

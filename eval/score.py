@@ -53,7 +53,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from core import catalog, contact
+from core import contact, worlds
 from core.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
@@ -74,9 +74,9 @@ class LogError(ValueError):
 def contact_points(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
     """(T, 3) positions the end effector reaches for when it does `program` to `target`: the
     points the oracle's skills go to (core/contact.py)."""
-    kind = catalog.kind(spec.object(target).kind)
+    kind = worlds.kind(spec.object(target).kind, spec.sim.world)
     if program == "place":
-        carried = catalog.kind(spec.object(spec.task.params["object"]).kind)
+        carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world)
         return contact.release_point(kind, objects[target], carried)
     return contact.grasp_point(kind, objects[target])
 

@@ -12,8 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import List, Optional
 
+import referents
+from core import worlds
 from core.layout import layout
-from core.world import MAX_IMAGE_SIZE, PHYSICS_DT
+from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.cli import UserError, compose_config
 from gen.partial import completed
 from gen.video import CODECS
@@ -43,7 +45,9 @@ class GenConfig:
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
-    profile: str = "native"  # native (joint targets, 16-d state) | libero (OSC end-effector deltas, LIBERO's features)
+    # native (joint targets, 16-d state) | libero (OSC end-effector deltas, LIBERO's features); default: the world's
+    profile: Optional[str] = None
+    world: Optional[str] = None  # native | libero_object (LIBERO-Object's scenes); default: the referent's
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -64,10 +68,15 @@ def parse(argv: list[str]) -> GenConfig:
 
 
 def validate(cfg: GenConfig) -> None:
+    world = resolve_world(cfg)
     try:
-        profile = layout(cfg.profile)
+        profile = layout(cfg.profile or world.profiles[0])
     except ValueError as exc:
         raise UserError(str(exc)) from None
+    if profile.name not in world.profiles:
+        only = " or ".join(world.profiles)
+        raise UserError(f"world {world.name} is recorded in profile {only} only, not profile={profile.name}")
+    cfg.profile = profile.name
     if cfg.image_size is None:
         cfg.image_size = profile.image_size
     if cfg.n <= 0:
@@ -101,6 +110,27 @@ def validate(cfg: GenConfig) -> None:
         check_output(Path(cfg.out), cfg.overwrite or cfg.resume and completed(Path(cfg.out)) is not None)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
+
+
+def resolve_world(cfg: GenConfig) -> worlds.World:
+    """The world a run's scenes happen in: the referent's, which `world=` may only confirm;
+    its files must be installed."""
+    home = referents.world_of(cfg.referent, cfg.spec)
+    try:
+        world = worlds.world(cfg.world or home)
+    except worlds.UnknownWorld as exc:
+        raise UserError(str(exc)) from None
+    if world.name != home:
+        others = ", ".join(referents.of_world(world.name)) or "none yet"
+        raise UserError(
+            f"referent {cfg.referent}'s scenes are in world {home}, not {world.name}; referents of world {world.name}: {others}"
+        )
+    try:
+        world.requires()
+    except worlds.WorldUnavailable as exc:
+        raise UserError(f"world={world.name}: {exc}") from None
+    cfg.world = world.name
+    return world
 
 
 def check_output(out: Path, overwrite: bool) -> None:

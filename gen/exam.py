@@ -83,6 +83,7 @@ def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
         "split": "exam",
         "command": provenance.command(),
         **({} if features.name == NATIVE.name else {"profile": features.name}),
+        **({} if sim.world == "native" else {"world": sim.world}),
         "observation": {
             "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY],
             "instruction": f"the `instruction` column of trials.parquet; info['instruction'] in the gymnasium env; "

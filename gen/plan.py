@@ -14,10 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 import referents
-from core import catalog
+from core import worlds
 from core.layout import layout
 from core.spec import EpisodeSpec, SceneObject, SimSettings
-from core.world import TABLE_TOP_Z
 from gen.audit import audit
 from gen.cli import UserError
 from gen.config import GenConfig
@@ -45,14 +44,15 @@ def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list
 def realize(
     referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0, split: str = "train"
 ) -> EpisodeSpec:
-    layout = referent.config.layout
+    layout, world = referent.config.layout, worlds.world(sim.world)
     rng = np.random.default_rng([seed, index, attempt, *SPLITS[split]])
     objects = []
     for p in design.placements:
-        kind = catalog.kind(p.candidate.kind)
-        x, y = np.asarray(layout.slots[p.slot]) + rng.uniform(-layout.jitter, layout.jitter, 2)
+        kind = world.kind(p.candidate.kind)
+        jitter = layout.jitter_at(p.slot)
+        x, y = np.asarray(layout.slots[p.slot]) + rng.uniform(-jitter, jitter, 2)
         yaw = rng.uniform(*layout.yaw)
-        pos = (round(float(x), 5), round(float(y), 5), round(kind.rest_z(TABLE_TOP_Z), 5))
+        pos = (round(float(x), 5), round(float(y), 5), round(kind.rest_z(world.surface_z), 5))
         objects.append(
             SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, pos, round(float(yaw), 5), dict(p.candidate.attributes))
         )
@@ -95,10 +95,15 @@ def load_referent(cfg: GenConfig) -> Referent:
         raise UserError(str(exc)) from None
 
 
-def sim_settings(cfg: GenConfig) -> SimSettings:
-    profile = layout(cfg.profile)
+def sim_settings(cfg: GenConfig, world: worlds.World) -> SimSettings:
+    profile = layout(cfg.profile or world.profiles[0])
     return SimSettings(
-        image_size=cfg.image_size or profile.image_size, fps=cfg.fps, cameras=profile.camera_names, profile=profile.name
+        image_size=cfg.image_size or profile.image_size,
+        fps=cfg.fps,
+        cameras=profile.camera_names,
+        robot_home=world.robot_home,
+        profile=profile.name,
+        world=world.name,
     )
 
 
@@ -116,7 +121,7 @@ def check_audit(report: dict) -> None:
 def plan_and_audit(cfg: GenConfig) -> Planned:
     """The options -> the audited plan every product is built from (bad input: `UserError`)."""
     referent = load_referent(cfg)
-    sim = sim_settings(cfg)
+    sim = sim_settings(cfg, worlds.world(referent.config.world))
     try:
         roles = designs(referent, cfg.n, cfg.seed, cfg.split)
     except ReferentSpecError as exc:

@@ -34,7 +34,7 @@ def rendered_frames(specs: list[EpisodeSpec], camera: str) -> dict[int, np.ndarr
 
     out = {}
     for spec in specs:
-        scene = scene_for(spec.assets, spec.sim.profile)
+        scene = scene_for(spec.assets, spec.sim.profile, spec.sim.world)
         scene.reset(spec)
         cams = Cameras(scene, spec.sim.image_size, (camera,))
         out[spec.index] = cams.render()[camera].copy()

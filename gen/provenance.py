@@ -15,7 +15,7 @@ from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 
-from core import __version__
+from core import __version__, worlds
 from core.layout import NATIVE
 from gen.config import GenConfig
 from referents import Referent
@@ -33,6 +33,8 @@ def run_record(cfg: GenConfig) -> dict:
     record = {k: getattr(cfg, k) for k in DETERMINING} | cfg.spec_overrides() | {"generator_version": __version__}
     if cfg.profile != NATIVE.name:  # native records keep the keys they always had, so old runs still resume
         record["profile"] = cfg.profile
+    if cfg.world not in (None, "native"):
+        record["world"] = cfg.world
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
@@ -66,9 +68,10 @@ class Provenance:
         """The `python -m gen ...` line that regenerates this product."""
         cfg = self.config
         parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
+        implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
         for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile"):
             value = getattr(cfg, name)
-            if value is not None and value != GenConfig.__dataclass_fields__[name].default:
+            if value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
                 parts.append(f"{name}={value}")
         for name in LIST_OPTIONS:
             if getattr(cfg, name):

@@ -36,8 +36,16 @@ def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outco
     return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])))
 
 
-def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan) -> Demo:
+def demonstrate(
+    scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan, state: np.ndarray | None = None, settle: int = 0
+) -> Demo:
+    """Run `plan` from the spec's poses, or from the physics `state` (an exam trial's start),
+    after `settle` steps that hold the arm still (a profile's settle steps)."""
     scene.reset(spec)
+    if state is not None:
+        scene.set_physics_state(state)
+    for _ in range(settle):
+        scene.step(scene.layout.hold_action(spec.sim.robot_home))
     start = scene.positions()
     skills = Skills(scene, ik, spec)
     try:

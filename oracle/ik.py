@@ -6,7 +6,8 @@ import mink
 import mujoco
 import numpy as np
 
-from oracle.scene import EE_SITE, FINGER_OPEN, robot_xml
+from oracle.drives import FINGER_OPEN
+from oracle.scene import EE_SITE, robot_xml
 
 # The grip site pointing straight down, fingers closing along world y (yaw 0).
 DOWN = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -37,8 +38,8 @@ class ArmIK:
     segments between them stay short and smooth.
     """
 
-    def __init__(self, home: np.ndarray, tol: float = 1e-3, max_iters: int = 300) -> None:
-        self.model = mujoco.MjModel.from_xml_string(robot_xml())
+    def __init__(self, home: np.ndarray, world: str = "native", tol: float = 1e-3, max_iters: int = 300) -> None:
+        self.model = mujoco.MjModel.from_xml_string(robot_xml(world))
         self.config = mink.Configuration(self.model)
         self.frame = mink.FrameTask(EE_SITE, "site", position_cost=1.0, orientation_cost=1.0)
         self.posture = mink.PostureTask(self.model, cost=1e-3)

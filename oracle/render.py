@@ -12,7 +12,7 @@ import atexit
 import mujoco
 import numpy as np
 
-from oracle.scene import Scene
+from oracle.scene import HIDDEN_GROUP, Scene
 
 
 class Cameras:
@@ -29,6 +29,7 @@ class Cameras:
             flags[flag] = False
         self.option = mujoco.MjvOption()
         self.option.geomgroup[0] = False  # collision geoms
+        self.option.geomgroup[HIDDEN_GROUP] = False  # parked bodies
         self.option.sitegroup[:] = False
         self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
         self._closed = False

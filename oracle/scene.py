@@ -1,8 +1,10 @@
-"""Episode spec -> MuJoCo scene: robosuite's Panda, table arena and objects.
+"""Episode spec -> MuJoCo scene, in the spec's world (core/worlds/): robosuite's Panda, table
+arena and objects (native), or LIBERO's arena, robot placement, cameras and object models.
 
-A model is compiled once per asset inventory (the spec's `assets`) and profile, and every
-episode re-poses it through the simulator state: objects in the episode are moved onto the
-table, the rest are parked under it, out of every camera's view and out of the contact solver.
+A model is compiled once per world, asset inventory (the spec's `assets`) and profile, and every
+episode re-poses it through the simulator state: objects in the episode are moved to their
+poses, the rest are parked (under the table, under the floor), out of every camera's view and
+out of the contact solver.
 The profile's controller (oracle/drives.py) decides what an action does: in the native profile
 the arm's torque motors become joint-position servos with gravity compensation, so an action is
 seven joint targets and a gripper command (-1 open, +1 closed); in the libero profile they stay
@@ -15,21 +17,23 @@ import logging
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from core import catalog, world
+from core import catalog, worlds
 from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
-from core.spec import EpisodeSpec, SceneObject
+from core.spec import EpisodeSpec, SceneObject, yaw_quat
+from core.worlds import native
 from oracle import meshes
-from oracle.drives import FINGER_OPEN, SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
+from oracle.drives import SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
 
 # robosuite logs warnings about optional extras at import; they say nothing about our use.
 logging.getLogger("robosuite_logs").addFilter(lambda record: record.levelno >= logging.ERROR)
 
 from robosuite.models import objects as rs_objects  # noqa: E402
-from robosuite.models.arenas import TableArena  # noqa: E402
+from robosuite.models.arenas import Arena, TableArena  # noqa: E402
 from robosuite.models.bases import robot_base_factory  # noqa: E402
 from robosuite.models.grippers import gripper_factory  # noqa: E402
 from robosuite.models.robots import Panda  # noqa: E402
@@ -40,18 +44,47 @@ ARM_JOINTS = tuple(f"robot0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
+IDENTITY = (1.0, 0.0, 0.0, 0.0)
 
 
-def _robot():
+HIDDEN_GROUP = 5  # geoms of parked bodies move to this group, which no camera draws (oracle/render.py)
+
+
+def _robot(world: worlds.World) -> Panda:
     robot = Panda(idn=0)
-    robot.add_base(robot_base_factory("RethinkMount", idn=0))
+    robot.add_base(robot_base_factory(world.mount or "NullMount", idn=0))
     robot.add_gripper(gripper_factory("PandaGripper", idn=0))
-    robot.set_base_xpos(world.ROBOT_BASE)
+    robot.set_base_xpos(world.robot_base)
     return robot
 
 
 def _build_object(kind: catalog.Kind, name: str) -> rs_objects.MujocoObject:
+    if kind.model == "libero":  # LIBERO's model file, loaded as LIBERO's objects load it (envs/objects/*.py)
+        from core.worlds import libero
+
+        return rs_objects.MujocoXMLObject(
+            str(libero.assets_root() / kind.params["xml"]),
+            name=name,
+            joints=[{"type": "free", "damping": "0.0005"}],
+            obj_type="all",
+            duplicate_collision_geoms=False,
+        )
     return getattr(rs_objects, kind.model)(name, **kind.params)
+
+
+def _libero_arena(world: worlds.World) -> Arena:
+    """LIBERO's arena file with its floor and wall textures (LIBERO's EmptyArena), its cameras set
+    as the world's problem class sets them."""
+    from core.worlds import libero
+
+    arena = Arena(str(libero.assets_root() / world.arena["scene"]))
+    for texture, file in (("texplane", world.arena["floor"]), ("tex-wall", world.arena["wall"])):
+        node = arena.asset.find(f"./texture[@name='{texture}']")
+        node.set("file", str(Path(node.get("file")).parent / file))
+    arena.set_origin([0, 0, 0])
+    cam = world.agentview
+    arena.set_camera(camera_name=NATIVE.cameras[AGENTVIEW], pos=list(cam.pos), quat=list(cam.quat))
+    return arena
 
 
 def _lookat_quat(pos: tuple[float, ...], target: tuple[float, ...]) -> np.ndarray:
@@ -80,11 +113,11 @@ def _servo_and_gravcomp(root: ET.Element) -> None:
             body.set("gravcomp", "1")
 
 
-def _configure(root: ET.Element) -> None:
+def _configure(root: ET.Element, world: worlds.World) -> None:
     option = root.find("option")
     assert option is not None
-    option.set("integrator", "implicitfast")
-    option.set("timestep", str(world.PHYSICS_DT))
+    option.set("integrator", world.integrator)
+    option.set("timestep", str(worlds.PHYSICS_DT))
     visual = root.find("visual")
     if visual is None:
         visual = ET.SubElement(root, "visual")
@@ -95,32 +128,37 @@ def _configure(root: ET.Element) -> None:
     glob = visual.find("global")
     if glob is None:
         glob = ET.SubElement(visual, "global")
-    glob.set("offwidth", str(world.MAX_IMAGE_SIZE))
-    glob.set("offheight", str(world.MAX_IMAGE_SIZE))
-    for cam in root.iter("camera"):
-        if cam.get("name") == NATIVE.cameras[AGENTVIEW]:
-            cam.set("pos", " ".join(map(str, world.AGENTVIEW_POS)))
-            cam.set("quat", " ".join(f"{v:.6f}" for v in _lookat_quat(world.AGENTVIEW_POS, world.AGENTVIEW_LOOKAT)))
-            cam.set("fovy", str(world.AGENTVIEW_FOVY))
+    glob.set("offwidth", str(worlds.MAX_IMAGE_SIZE))
+    glob.set("offheight", str(worlds.MAX_IMAGE_SIZE))
+    cam = world.agentview
+    for node in root.iter("camera"):
+        if node.get("name") == NATIVE.cameras[AGENTVIEW] and cam.lookat is not None:
+            node.set("pos", " ".join(map(str, cam.pos)))
+            node.set("quat", " ".join(f"{v:.6f}" for v in _lookat_quat(cam.pos, cam.lookat)))
+            node.set("fovy", str(cam.fovy))
 
 
-def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.controller) -> str:
-    """The MJCF of a scene holding `count` bodies of each catalog kind, for a profile's controller."""
-    arena = TableArena(table_full_size=world.TABLE_SIZE, table_offset=(0, 0, world.TABLE_TOP_Z))
-    objects = [_build_object(catalog.kind(kind), f"{kind}{i}") for kind, count in sorted(assets) for i in range(count)]
-    task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot()], mujoco_objects=objects)
+def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.controller, world_name: str = "native") -> str:
+    """The MJCF of a world's scene holding `count` bodies of each of its kinds, for a profile's controller."""
+    world = worlds.world(world_name)
+    if world.builder == "table":
+        arena = TableArena(table_full_size=native.TABLE_SIZE, table_offset=(0, 0, native.TABLE_TOP_Z))
+    else:
+        arena = _libero_arena(world)
+    objects = [_build_object(world.kind(kind), world.body_name(kind, i)) for kind, count in sorted(assets) for i in range(count)]
+    task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot(world)], mujoco_objects=objects)
     root = ET.fromstring(task.get_xml())
     if controller == NATIVE.controller:
         _servo_and_gravcomp(root)
-    _configure(root)
-    meshes.lighten(root)
+    _configure(root, world)
+    meshes.lighten(root, objects=world.builder != "table")
     return ET.tostring(root, encoding="unicode")
 
 
-def robot_xml() -> str:
-    """The robot alone, at the same base pose: the IK model."""
+def robot_xml(world_name: str = "native") -> str:
+    """The world's robot alone, at the same base pose: the IK model."""
     arena_free = MujocoWorldBase()
-    arena_free.merge(_robot())
+    arena_free.merge(_robot(worlds.world(world_name)))
     return arena_free.get_xml()
 
 
@@ -133,16 +171,17 @@ class Body:
     qpos_adr: int
     geom_ids: tuple[int, ...]
     park: np.ndarray  # free-joint qpos when not in the episode
-    collision: tuple[tuple[int, int], ...]  # compiled (contype, conaffinity) of each geom
+    collision: tuple[tuple[int, int, int], ...]  # compiled (contype, conaffinity, group) of each geom
 
 
 class Scene:
     """A compiled scene that episodes re-pose by state, never by re-parsing."""
 
-    def __init__(self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name) -> None:
+    def __init__(self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native") -> None:
         self.assets = tuple(sorted(assets))
         self.layout: FeatureLayout = layout(profile)
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller))
+        self.world = worlds.world(world)
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world))
         m = self.model
         self.drive: Drive
         if self.layout.controller == NATIVE.controller:
@@ -161,18 +200,18 @@ class Scene:
         self.home = np.zeros(len(ARM_JOINTS))  # the episode's, from reset()
         self.substeps = 1  # set per spec from its fps
         self.bodies: dict[str, list[Body]] = {}
-        spots = [(x, y) for x in world.PARK_X for y in world.PARK_Y]
+        spots = self.world.park
         index = 0
         for kind_name, count in self.assets:
-            kind = catalog.kind(kind_name)
+            kind = self.world.kind(kind_name)
             for i in range(count):
-                name = f"{kind_name}{i}"
+                name = self.world.body_name(kind_name, i)
                 joint = m.joint(f"{name}_joint0")
                 body_id = int(m.jnt_bodyid[joint.id])
-                geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] == body_id)
+                geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] == body_id or _descends(m, m.geom_bodyid[g], body_id))
                 x, y = spots[index % len(spots)]
-                park = np.array([x, y, kind.rest_z(0.0) + 0.001 * (index // len(spots)), 1, 0, 0, 0])
-                collision = tuple((int(m.geom_contype[g]), int(m.geom_conaffinity[g])) for g in geoms)
+                park = np.array([x, y, kind.rest_z(self.world.park_z) + 0.001 * (index // len(spots)), *kind.quat])
+                collision = tuple((int(m.geom_contype[g]), int(m.geom_conaffinity[g]), int(m.geom_group[g])) for g in geoms)
                 body = Body(kind, body_id, joint.qposadr[0], geoms, park, collision)
                 self.bodies.setdefault(kind_name, []).append(body)
                 index += 1
@@ -185,11 +224,11 @@ class Scene:
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         self.substeps = int(round(1.0 / (spec.sim.fps * m.opt.timestep)))
-        home = np.asarray(spec.sim.robot_home)
+        home, world = np.asarray(spec.sim.robot_home), self.world
         d.qpos[self.arm_qpos] = home
-        d.qpos[self.finger_qpos] = (FINGER_OPEN, -FINGER_OPEN)
+        d.qpos[self.finger_qpos] = (world.finger_home, -world.finger_home)
         d.ctrl[:7] = home if self.layout.controller == NATIVE.controller else 0.0  # servo targets, or torques
-        d.ctrl[7:9] = (FINGER_OPEN, -FINGER_OPEN)
+        d.ctrl[7:9] = (world.finger_target, -world.finger_target)
         free = {kind: list(bodies) for kind, bodies in self.bodies.items()}
         self.placed = {}
         for obj in spec.objects:
@@ -212,13 +251,18 @@ class Scene:
         costs the contact solver nothing; a placed one gets its compiled collisions back."""
         m = self.model
         m.body_gravcomp[body.body_id] = 1.0 if parked else 0.0
-        for g, (contype, conaffinity) in zip(body.geom_ids, body.collision):
+        for g, (contype, conaffinity, group) in zip(body.geom_ids, body.collision):
             m.geom_contype[g] = 0 if parked else contype
             m.geom_conaffinity[g] = 0 if parked else conaffinity
+            m.geom_group[g] = HIDDEN_GROUP if parked else group
 
     def _pose(self, body: Body, obj: SceneObject) -> None:
-        half = obj.yaw / 2
-        self.data.qpos[body.qpos_adr : body.qpos_adr + 7] = (*obj.pos, np.cos(half), 0.0, 0.0, np.sin(half))
+        if body.kind.quat == IDENTITY:
+            half = obj.yaw / 2
+            quat: tuple[float, ...] = (np.cos(half), 0.0, 0.0, np.sin(half))
+        else:
+            quat = yaw_quat(obj.yaw, body.kind.quat)
+        self.data.qpos[body.qpos_adr : body.qpos_adr + 7] = (*obj.pos, *quat)
         if body.kind.colorable:
             rgba = catalog.COLORS[obj.attributes.get("color", "white")]
             for g in body.geom_ids:
@@ -259,7 +303,13 @@ class Scene:
         return {k: tuple(float(v) for v in self.data.xpos[b.body_id]) for k, b in self.placed.items()}  # type: ignore[misc]
 
     def object_yaw(self, object_id: str) -> float:
-        mat = self.data.xmat[self.placed[object_id].body_id].reshape(3, 3)
+        """How far the object is turned about the world's z from its resting orientation."""
+        body = self.placed[object_id]
+        mat = self.data.xmat[body.body_id].reshape(3, 3)
+        if body.kind.quat != IDENTITY:
+            rest = np.zeros(9)
+            mujoco.mju_quat2Mat(rest, np.asarray(body.kind.quat, float))
+            mat = mat @ rest.reshape(3, 3).T
         return float(np.arctan2(mat[1, 0], mat[0, 0]))
 
     def physics_state(self) -> np.ndarray:
@@ -268,6 +318,19 @@ class Scene:
         state = np.empty(mujoco.mj_stateSize(self.model, spec))
         mujoco.mj_getState(self.model, self.data, state, spec)
         return state
+
+    def set_joints(self, qpos: dict[str, np.ndarray], qvel: dict[str, np.ndarray]) -> None:
+        """Set joints by name (another simulator's state of the same bodies, e.g. LIBERO's); the
+        controller restarts from there."""
+        m, d = self.model, self.data
+        for name, value in qpos.items():
+            start = m.joint(name).qposadr[0]
+            d.qpos[start : start + len(value)] = value
+        for name, value in qvel.items():
+            start = m.joint(name).dofadr[0]
+            d.qvel[start : start + len(value)] = value
+        mujoco.mj_forward(m, d)
+        self.drive.reset(self.home)
 
     def set_physics_state(self, state: np.ndarray) -> None:
         """Restore a state `physics_state` returned; the controller restarts from it."""
@@ -285,7 +348,16 @@ def axis_angle(wxyz: np.ndarray) -> np.ndarray:
     return np.asarray(wxyz[1:]) * 2.0 * np.arccos(w) / den
 
 
+def _descends(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
+    """Whether `body` is `ancestor` or inside it (LIBERO's objects nest their geoms in a child body)."""
+    while body > 0:
+        if body == ancestor:
+            return True
+        body = int(model.body_parentid[body])
+    return False
+
+
 @lru_cache(maxsize=4)
-def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name) -> Scene:
-    """One compiled scene per inventory, profile and process."""
-    return Scene(assets, profile)
+def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native") -> Scene:
+    """One compiled scene per inventory, profile, world and process."""
+    return Scene(assets, profile, world)

@@ -41,7 +41,7 @@ class Skills:
         self.spec = spec
         self.limits = limits
         self.dt = 1.0 / spec.sim.fps
-        self.q = np.asarray(spec.sim.robot_home, dtype=float)
+        self.q = scene.data.qpos[scene.arm_qpos].copy()  # where the arm is: the home pose, or a recorded start
         self.yaw = 0.0
         self.gripper = OPEN
         self.held: tuple[str, float] | None = None  # (object id, grip site height above its bottom)
@@ -75,7 +75,7 @@ class Skills:
             self._execute(q)
 
     def _kind(self, object_id: str) -> catalog.Kind:
-        return catalog.kind(self.spec.object(object_id).kind)
+        return self.scene.world.kind(self.spec.object(object_id).kind)
 
     def bottom_of(self, object_id: str) -> np.ndarray:
         """Centre of the object's bottom face, from its current simulated pose."""

@@ -11,6 +11,9 @@ module (`<type>.py`) that keeps to the contract in `referents.contract`:
 * `assets(config)` — the model inventory (default: one body per candidate of a kind, at most
   `objects_per_scene`);
 * `validate(config)` — type-specific checks of the spec (default: none);
+* `shortcut(config, spec) -> EpisodeSpec` — what an instruction-blind policy does in a scene,
+  which the `position` reference policy demonstrates (default: pick up whatever stands nearest
+  the canonical slot);
 * `CONFOUNDS` — the shortcuts `confound=` may re-introduce (default: none).
 
 The built-in types live here; a spec file given by path may bring its type's module beside it
@@ -24,6 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from core.demo import Plan, Skills
 from core.spec import EpisodeSpec
 from referents.balance import Balance
@@ -32,7 +37,7 @@ from referents.design import Design
 from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
 
-__all__ = ["HERE", "Referent", "UnknownReferent", "available", "demo_of", "load", "pick_and_lift"]
+__all__ = ["HERE", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "pick_and_lift", "world_of"]
 
 HERE = Path(__file__).parent
 
@@ -79,6 +84,10 @@ class Referent:
     def answer(self, spec: EpisodeSpec) -> str:
         return self.code.answer(spec)
 
+    def shortcut(self, spec: EpisodeSpec) -> EpisodeSpec:
+        """The episode an instruction-blind policy would do in this scene (what `position` demonstrates)."""
+        return self.code.shortcut(self.config, spec)
+
 
 def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | None:
     """Where a type's code lives: beside the spec file it came from, else among the built-in types."""
@@ -87,6 +96,23 @@ def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | Non
         if beside.parent != HERE.resolve() and beside.is_file():
             return beside
     return HERE / f"{referent_type}.py" if referent_type in available() else None
+
+
+def world_of(name: str, spec_path: str | None = None) -> str:
+    """The world a referent's scenes happen in, read from its spec without validating it (a
+    spec that cannot be read says "native" here and fails, naming its problem, when loaded)."""
+    path = Path(spec_path) if spec_path is not None else HERE / f"{name}.yaml"
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError):
+        return "native"
+    world = data.get("world", "native") if isinstance(data, dict) else "native"
+    return world if isinstance(world, str) else "native"
+
+
+def of_world(world: str) -> list[str]:
+    """The built-in referent types whose scenes are in `world`."""
+    return [name for name in available() if world_of(name) == world]
 
 
 def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:

@@ -4,7 +4,7 @@ crossed scene in which no single word picks the target. Every choice goes throug
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from core.spec import Counterfactual
@@ -22,18 +22,21 @@ def slug(text: str) -> str:
     return text.replace(" ", "_")
 
 
-def target_slot(cfg: ReferentConfig, balance: Balance, key: Hashable, options: Sequence[int]) -> int:
+def target_slot(cfg: ReferentConfig, balance: Balance, key: str, options: Sequence[int]) -> int:
     """The target's slot: least used for `key`, or always the canonical one under confound=position."""
     if cfg.confound == "position":
-        if cfg.layout.canonical_slot not in options:
+        canonical = cfg.layout.canonical(key)
+        if canonical not in options:
             raise ValueError("the canonical slot is not free")
-        return cfg.layout.canonical_slot
+        return canonical
     return balance.pick(("target_slot", key), list(options), also="slot")
 
 
-def choose_scene(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate], naming: str) -> list[Placement]:
+def choose_scene(
+    cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate], naming: str, slots: Sequence[int] | None = None
+) -> list[Placement]:
     """A target and `objects_per_scene - 1` distractors that each differ from every other in
-    the naming variable; the target comes first.
+    the naming variable, in `slots` (default: all of the layout's); the target comes first.
 
     The target value is the least-used one, its instance the least-used of that value, at its
     least-used slot; distractor values are the least-used as distractors, each instance at its
@@ -45,7 +48,7 @@ def choose_scene(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate
     targets = [c for c in pool if c.targetable]
     value = balance.pick("target", list(dict.fromkeys(c.word(naming) for c in targets)))
     target = balance.pick(("instance", value), [c for c in targets if c.word(naming) == value])
-    slots = list(range(len(cfg.layout.slots)))
+    slots = list(range(len(cfg.layout.slots))) if slots is None else list(slots)
     placements = [Placement(slug(target.key), target, target_slot(cfg, balance, target.key, slots))]
     others = list(dict.fromkeys(c.word(naming) for c in pool if c.word(naming) != value))
     if len(others) < cfg.objects_per_scene - 1:
@@ -59,10 +62,13 @@ def choose_scene(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate
     return placements
 
 
-def naming_design(cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate] | None = None) -> Design:
+def naming_design(
+    cfg: ReferentConfig, balance: Balance, pool: Sequence[Candidate] | None = None, slots: Sequence[int] | None = None
+) -> Design:
     """One target named by a single word (its name, or an attribute) among distractors that
-    each have another value of it; the swap counterfactual names each distractor instead."""
-    placements = choose_scene(cfg, balance, cfg.objects if pool is None else pool, cfg.naming)
+    each have another value of it (in `slots`, default all); the swap counterfactual names each
+    distractor instead."""
+    placements = choose_scene(cfg, balance, cfg.objects if pool is None else pool, cfg.naming, slots)
     target = placements[0].candidate
     template = balance.pick("template", cfg.templates)
     return Design(

@@ -16,13 +16,15 @@ import importlib.util
 import sys
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from types import ModuleType
 
-from core import catalog
+import numpy as np
+
+from core import worlds
 from core.demo import Plan, Skills
-from core.spec import EpisodeSpec
+from core.spec import EpisodeSpec, TaskSpec
 from referents.balance import Balance
 from referents.design import Design
 from referents.features import Alternative, object_alternatives
@@ -42,6 +44,13 @@ def _accept(cfg: ReferentConfig) -> None:
     """No checks beyond the schema's."""
 
 
+def nearest_canonical(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
+    """The instruction-blind shortcut: pick up whatever stands nearest the canonical slot."""
+    x, y = cfg.layout.slots[cfg.layout.canonical_slot]  # type: ignore[index]
+    nearest = min(spec.objects, key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
+    return replace(spec, target=nearest.id, task=TaskSpec(program="pick"))
+
+
 @dataclass(frozen=True)
 class TypeModule:
     """A referent type's code: the contract's names as its module defines them, defaults filled in."""
@@ -52,6 +61,7 @@ class TypeModule:
     answer: Callable[[EpisodeSpec], str] = _the_target  # the id of the right alternative
     assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
     validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
+    shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical  # what `position` demonstrates
     CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
 
     def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:
@@ -65,8 +75,9 @@ class TypeModule:
         for pair in pairs:
             if len(pair) != 2 or not isinstance(pair[1], int) or pair[1] < 1:
                 raise cfg.fail("assets", f"{pair!r} is not a (kind, count >= 1) pair {where}")
-            if not isinstance(pair[0], str) or pair[0] not in catalog.KINDS:
-                raise cfg.fail("assets", f"unknown kind {pair[0]!r} {where}; known: {', '.join(sorted(catalog.KINDS))}")
+            kinds = worlds.world(cfg.world).kinds
+            if not isinstance(pair[0], str) or pair[0] not in kinds:
+                raise cfg.fail("assets", f"unknown kind {pair[0]!r} {where}; known: {', '.join(sorted(kinds))}")
         inventory = tuple(sorted(pairs))  # type: ignore[arg-type]
         twice = [kind for kind, n in Counter(kind for kind, _ in inventory).items() if n > 1]
         if twice:

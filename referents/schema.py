@@ -13,9 +13,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from core import catalog
+from core import catalog, worlds
 from core.spec import TaskSpec
-from core.world import TABLE_SIZE
 
 CONFOUNDS = ("position",)
 
@@ -56,12 +55,22 @@ class Candidate:
 @dataclass(frozen=True)
 class Layout:
     """Where objects may stand: slot centres (x, y) on the table, jitter, yaw range, and the
-    canonical slot a `confound=position` dataset always puts the target in."""
+    canonical slot a `confound=position` dataset always puts the target in: one for every
+    target, or one per target value (e.g. LIBERO's target_object_region of each task)."""
 
     slots: tuple[tuple[float, float], ...]
-    jitter: float = 0.02
+    jitter: float | tuple[float, ...] = 0.02  # one for every slot, or one per slot
     yaw: tuple[float, float] = (-np.pi, np.pi)
-    canonical_slot: int = 0
+    canonical_slot: int | dict[str, int] = 0
+
+    def canonical(self, value: str) -> int:
+        """The canonical slot of a target whose naming value (or key) is `value`."""
+        slots = self.canonical_slot
+        return slots if isinstance(slots, int) else slots[value]
+
+    def jitter_at(self, slot: int) -> float:
+        """How far (m, along x and y) an object may stand from the slot's centre."""
+        return self.jitter[slot] if isinstance(self.jitter, tuple) else self.jitter
 
 
 @dataclass(frozen=True)
@@ -86,6 +95,7 @@ class ReferentConfig:
     distractor_only: tuple[str, ...] = ()
     targets: tuple[str, ...] = ()
     confound: str | None = None
+    world: str = "native"  # the world its scenes happen in (core/worlds/): its objects and where they may stand
     extra: dict[str, Any] = field(default_factory=dict)  # type-specific fields
 
     @classmethod
@@ -111,7 +121,11 @@ class ReferentConfig:
         for name in ("type", "naming"):
             if not isinstance(data[name], str) or not data[name].isidentifier():
                 raise fail(name, f"must be a word, got {data[name]!r}")
-        objects = _candidates(data.pop("objects"), fail)
+        try:
+            world = worlds.world(str(data.pop("world", "native")))
+        except worlds.UnknownWorld as exc:
+            raise fail("world", str(exc)) from None
+        objects = _candidates(data.pop("objects"), fail, world)
         naming = data.pop("naming")
         if len({c.key for c in objects}) != len(objects):
             raise fail("objects", "two objects share the same name and attributes")
@@ -132,7 +146,7 @@ class ReferentConfig:
             )
             for c in objects
         ]
-        layout = _layout(data.pop("layout"), fail)
+        layout = _layout(data.pop("layout"), fail, world)
         k = data.pop("objects_per_scene")
         if not isinstance(k, int) or k < 1:
             raise fail("objects_per_scene", f"must be a positive integer, got {k!r}")
@@ -170,6 +184,7 @@ class ReferentConfig:
             distractor_only=vocabulary["distractor_only"],
             targets=vocabulary["targets"],
             confound=confound,
+            world=world.name,
             extra=data,
         )
 
@@ -201,7 +216,7 @@ def _strings(raw: Any, field_name: str, fail: Callable[[str, str], ReferentSpecE
     return [str(v) for v in raw]
 
 
-def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> list[Candidate]:
+def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worlds.World) -> list[Candidate]:
     """Objects, where a list-valued attribute expands into one candidate per value."""
     if not isinstance(raw, list) or not raw:
         raise fail("objects", "must be a non-empty list")
@@ -211,8 +226,9 @@ def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> list
             raise fail(f"objects[{i}]", "each object needs 'kind' and 'name' (words)")
         if not isinstance(o.get("role", ""), str):
             raise fail(f"objects[{i}].role", f"must be a word, got {o['role']!r}")
-        if o["kind"] not in catalog.KINDS:
-            raise fail(f"objects[{i}].kind", f"unknown kind {o['kind']!r}; known: {', '.join(sorted(catalog.KINDS))}")
+        if o["kind"] not in world.kinds:
+            known = ", ".join(sorted(world.kinds))
+            raise fail(f"objects[{i}].kind", f"unknown kind {o['kind']!r} in world {world.name}; known: {known}")
         attrs = o.get("attributes") or {}
         if not isinstance(attrs, dict):
             raise fail(f"objects[{i}].attributes", "must be a mapping")
@@ -229,19 +245,30 @@ def _candidates(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> list
     return out
 
 
-def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError]) -> Layout:
+def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worlds.World) -> Layout:
     if not isinstance(raw, dict) or "slots" not in raw:
         raise fail("layout.slots", "missing field")
     try:
         slots = tuple((float(x), float(y)) for x, y in raw["slots"])
         yaw = tuple(float(v) for v in raw.get("yaw", (-np.pi, np.pi)))
-        layout = Layout(slots, float(raw.get("jitter", 0.02)), yaw, int(raw.get("canonical_slot", 0)))  # type: ignore[arg-type]
+        jitter = raw.get("jitter", 0.02)
+        jitter = tuple(float(j) for j in jitter) if isinstance(jitter, list) else float(jitter)
+        if isinstance(jitter, tuple) and len(jitter) != len(slots):
+            raise ValueError("one jitter per slot")
+        canonical = raw.get("canonical_slot", 0)
+        canonical = {str(k): int(v) for k, v in canonical.items()} if isinstance(canonical, dict) else int(canonical)
+        layout = Layout(slots, jitter, yaw, canonical)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise fail("layout", "slots must be [x, y] pairs, jitter a number, yaw [min, max]") from None
-    half_x, half_y = TABLE_SIZE[0] / 2 - 0.05, TABLE_SIZE[1] / 2 - 0.05
+        raise fail("layout", "slots must be [x, y] pairs, jitter a number (or one per slot), yaw [min, max]") from None
+    x0, x1, y0, y1 = world.reach
     for i, (x, y) in enumerate(layout.slots):
-        if abs(x) > half_x or abs(y) > half_y:
-            raise fail(f"layout.slots[{i}]", f"({x}, {y}) is off the table (|x| <= {half_x}, |y| <= {half_y})")
-    if not 0 <= layout.canonical_slot < len(slots):
-        raise fail("layout.canonical_slot", f"must index layout.slots (0..{len(slots) - 1})")
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            raise fail(
+                f"layout.slots[{i}]",
+                f"({x}, {y}) is off the workspace of world {world.name} (x in [{x0:g}, {x1:g}], y in [{y0:g}, {y1:g}])",
+            )
+    canonical = layout.canonical_slot
+    for slot in canonical.values() if isinstance(canonical, dict) else (canonical,):
+        if not 0 <= slot < len(slots):
+            raise fail("layout.canonical_slot", f"must index layout.slots (0..{len(slots) - 1}), got {slot}")
     return layout

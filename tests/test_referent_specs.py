@@ -35,7 +35,7 @@ def _gen(*args: str) -> subprocess.CompletedProcess[str]:
         ),
         (lambda d: d["objects"][0].update(kind="spaceship"), "objects[0].kind: unknown kind 'spaceship'"),
         (lambda d: d.update(objects_per_scene=9), "objects_per_scene: 9 objects cannot fit in the 6 slots"),
-        (lambda d: d["layout"]["slots"].append([0.9, 0.0]), "layout.slots[6]: (0.9, 0.0) is off the table"),
+        (lambda d: d["layout"]["slots"].append([0.9, 0.0]), "layout.slots[6]: (0.9, 0.0) is off the workspace of world native"),
         (lambda d: d.update(holdout=["chartreuse"]), "holdout: 'chartreuse' names no object"),
         (lambda d: d.update(confound="lighting"), "confound: unknown confound 'lighting'"),
     ],

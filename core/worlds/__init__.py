@@ -1,0 +1,111 @@
+"""Worlds: where episodes happen. A world is the arena (a table, LIBERO's floor), the robot on
+its mount, the cameras, the object models a scene can hold, and where objects rest; the
+success predicates read its objects' geometry (core/success.py).
+
+One module per world (`core/worlds/<name>.py`), each holding plain data: the episode spec names
+its world (`SimSettings.world`), referents plan within the world's objects and regions, the
+oracle builds the world's scene from this description (oracle/scene.py), and the writer, exam
+and battery never ask which world it is. `native` is this project's own scene; the LIBERO
+worlds are LIBERO's scenes as its BDDL problems define them, built from LIBERO's assets
+(core/worlds/libero.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+from core.catalog import Kind
+
+PHYSICS_DT = 0.002  # simulation timestep, seconds; control periods are whole multiples of it
+MAX_IMAGE_SIZE = 1024  # largest square frame a renderer may ask for
+
+
+class UnknownWorld(ValueError):
+    """A world name no module defines; the message names the known ones."""
+
+
+class WorldUnavailable(RuntimeError):
+    """A world whose assets are not installed; the message says how to install them."""
+
+
+def _numbered(kind: str, i: int) -> str:
+    return f"{kind}{i}"
+
+
+def _ready() -> None:
+    """Nothing to install."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A fixed camera's pose in the world frame: an orientation (MuJoCo's convention: it looks
+    along its -z), or a point it looks at with the world's z up."""
+
+    pos: tuple[float, float, float]
+    quat: tuple[float, float, float, float] | None = None  # w, x, y, z
+    lookat: tuple[float, float, float] | None = None
+    fovy: float = 45.0
+
+
+@dataclass(frozen=True)
+class World:
+    """Everything that makes one family of scenes, as data.
+
+    `builder` names how oracle/scene.py assembles the model (`table`: robosuite's table arena,
+    this project's native scenes; `libero`: LIBERO's scene files and object models). `park`
+    spots hold the bodies a scene compiles but an episode does not use: out of every camera's
+    view and out of the contact solver. `profiles` are the feature layouts (core/layout.py) the
+    world can be recorded in, the first being its default.
+    """
+
+    name: str
+    kinds: Mapping[str, Kind]
+    surface_z: float  # the height objects rest on (table top, floor)
+    reach: tuple[float, float, float, float]  # x min, x max, y min, y max where an object may stand
+    robot_base: tuple[float, float, float]
+    robot_home: tuple[float, ...]  # arm joints at the start of an episode
+    finger_home: float  # finger joint opening at the start of an episode, metres
+    finger_target: float  # the finger actuators' target then (robosuite's gripper at rest: half open)
+    profiles: tuple[str, ...]
+    agentview: Camera
+    park: tuple[tuple[float, float], ...]  # (x, y) spots for the bodies an episode does not use
+    park_z: float  # the surface they rest on there (under the table, under the floor)
+    builder: str
+    mount: str | None = "RethinkMount"  # robosuite mount under the robot (None: none, the robot stands on the floor)
+    integrator: str = "implicitfast"
+    arena: Mapping[str, str] = field(default_factory=dict)  # builder-specific: scene file, floor and wall styles
+    suite: str = ""  # the LIBERO benchmark suite whose BDDL problems lay the world's scenes out
+    episode_steps: int = 0  # the steps an evaluation of the suite allows (lerobot's LIBERO env), after its settle steps
+    body_name: Callable[[str, int], str] = _numbered  # the model's name for the i-th (from 0) body of a kind
+    requires: Callable[[], None] = _ready  # raises WorldUnavailable when the world's assets are missing
+
+    def kind(self, name: str) -> Kind:
+        try:
+            return self.kinds[name]
+        except KeyError:
+            raise KeyError(f"unknown object kind {name!r} in world {self.name}; known: {', '.join(sorted(self.kinds))}") from None
+
+
+def _worlds() -> dict[str, World]:
+    from core.worlds import libero_object, native
+
+    return {w.name: w for w in (native.WORLD, libero_object.WORLD)}
+
+
+def names() -> list[str]:
+    return list(_worlds())
+
+
+def world(name: str) -> World:
+    """The world called `name`, or UnknownWorld naming the known ones."""
+    worlds = _worlds()
+    try:
+        return worlds[name]
+    except KeyError:
+        raise UnknownWorld(f"unknown world {name!r}; known: {', '.join(worlds)}") from None
+
+
+def kind(name: str, world_name: str = "native") -> Kind:
+    """The object kind `name` of a world (a KeyError names the world's kinds)."""
+    return world(world_name).kind(name)

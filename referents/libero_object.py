@@ -1,0 +1,78 @@
+"""LIBERO-Object's object axis: the named grocery goes into the basket (see libero_object.yaml).
+
+The groceries are chosen, placed and named as in the object referent (every grocery the target
+and a distractor in every region equally often), in the layout's grocery slots; the basket, the
+spec's `container`, stands in the last slot of every scene. Only groceries are alternatives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from core import worlds
+from core.demo import Skills
+from core.spec import EpisodeSpec
+from core.worlds import libero
+from referents.balance import Balance
+from referents.compose import naming_design, slug
+from referents.design import Design, Placement
+from referents.features import Alternative, object_alternatives
+from referents.schema import Candidate, ReferentConfig
+
+CONFOUNDS = ("position",)
+
+
+def _container(cfg: ReferentConfig) -> Candidate:
+    field = cfg.need("container", dict)
+    return Candidate(str(field.get("kind")), str(field.get("name")), role="container")
+
+
+def validate(cfg: ReferentConfig) -> None:
+    container = worlds.world(cfg.world).kinds.get(_container(cfg).kind)
+    if container is None or container.contain is None:
+        raise cfg.fail("container", f"{_container(cfg).kind!r} is not a container of world {cfg.world}")
+    if len(cfg.layout.slots) != cfg.objects_per_scene + 1:
+        raise cfg.fail("layout.slots", f"needs one slot per grocery ({cfg.objects_per_scene}) and the container's last")
+
+
+def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    groceries = naming_design(cfg, balance, slots=range(cfg.objects_per_scene))
+    container = _container(cfg)
+    basket = Placement(slug(container.name), container, len(cfg.layout.slots) - 1)
+    task = replace(cfg.task, params={**cfg.task.params, "destination": basket.id})
+    return replace(groceries, placements=(*groceries.placements, basket), task=task)
+
+
+def demo(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.target)
+    skills.lift(0.1)
+    skills.place(spec.task.params["destination"])
+
+
+def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
+    destination = spec.task.params.get("destination")
+    return object_alternatives(cfg, spec, [o.id for o in spec.objects if o.id != destination])
+
+
+def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
+    return [*ReferentConfig.assets(cfg), (_container(cfg).kind, 1)]
+
+
+def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
+    """What a policy that learnt LIBERO-Object's layouts instead of its words does: it knows
+    the scene by its groceries and fetches whatever stands in that task's target region (a
+    scene of no LIBERO task: region 0, the target region of half of them)."""
+    destination = spec.task.params["destination"]
+    groceries = {o.kind for o in spec.objects if o.id != destination}
+    suite, slot = worlds.world(cfg.world).suite, 0
+    for task in libero.tasks(suite):
+        problem = libero.problem(suite, task)
+        target = problem.objects[problem.goal[0][1]]  # (In <target> basket_1_contain_region)
+        if groceries == {c for c in problem.objects.values() if c != _container(cfg).kind}:
+            slot = cfg.layout.canonical(next(c.key for c in cfg.objects if c.kind == target))
+    x, y = cfg.layout.slots[slot]
+    chosen = min((o for o in spec.objects if o.id != destination), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
+    return replace(spec, target=chosen.id)
+
