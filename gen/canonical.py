@@ -20,6 +20,7 @@ import sys
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from gen.cli import UserError, main
 from gen.config import check_output
 from gen.partial import staging
 from referents import Referent
+
+if TYPE_CHECKING:
+    from oracle.scene import Scene
 
 NAME_TEMPLATE = "pick up the {name} and place it in the basket"  # LIBERO-Object's instructions, word for word
 
@@ -119,12 +123,9 @@ def build(options: CanonicalOptions) -> None:
     scene = scene_for(referent.assets(), profile.name, world.name)
     rows, specs = [], []
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{world.suite} initial states", unit="state")
-    for t, task in enumerate(tasks):
-        problem, states = libero.problem(world.suite, task), libero.initial_states(world.suite, task)
+    for task in tasks:
         for s in chosen[task]:
-            spec = _posed(trial_spec(referent, world, task, len(specs), options.seed, sim), states[s], problem, world)
-            scene.reset(spec)
-            scene.set_joints(*libero.split_state(states[s], problem))
+            spec = load_state(scene, referent, world, task, s, sim, len(specs), options.seed)
             values = {a.id: a.value for a in referent.alternatives(spec)}
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
@@ -140,6 +141,19 @@ def build(options: CanonicalOptions) -> None:
         f"wrote an exam of {len(specs)} LIBERO initial states ({len(tasks)} tasks x {options.states}) to {out} "
         f"in {time.perf_counter() - started:.1f} s\ntake it with: python -m eval policy=<policy> exam={out}"
     )
+
+
+def load_state(
+    scene: Scene, referent: Referent, world: worlds.World, task: str, state: int, sim: SimSettings, index: int = 0, seed: int = 0
+) -> EpisodeSpec:
+    """Put `scene` in a LIBERO task's initial state number `state` (joints set by name from
+    LIBERO's state vector); returns the trial's spec, its objects posed as that state poses them."""
+    problem = libero.problem(world.suite, task)
+    vector = libero.initial_states(world.suite, task)[state]
+    spec = _posed(trial_spec(referent, world, task, index, seed, sim), vector, problem, world)
+    scene.reset(spec)
+    scene.set_joints(*libero.split_state(vector, problem))
+    return spec
 
 
 def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world: worlds.World) -> EpisodeSpec:

@@ -44,6 +44,8 @@ def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list
 def realize(
     referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0, split: str = "train"
 ) -> EpisodeSpec:
+    if sim.world != referent.config.world:
+        raise ValueError(f"referent {referent.name}'s scenes are in world {referent.config.world}, not {sim.world}")
     layout, world = referent.config.layout, worlds.world(sim.world)
     rng = np.random.default_rng([seed, index, attempt, *SPLITS[split]])
     objects = []
@@ -95,16 +97,26 @@ def load_referent(cfg: GenConfig) -> Referent:
         raise UserError(str(exc)) from None
 
 
-def sim_settings(cfg: GenConfig, world: worlds.World) -> SimSettings:
-    profile = layout(cfg.profile or world.profiles[0])
+def world_sim(world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20) -> SimSettings:
+    """A world's sim settings: its robot's home, a profile it is recorded in (default its own)."""
+    features = layout(profile or world.profiles[0])
     return SimSettings(
-        image_size=cfg.image_size or profile.image_size,
-        fps=cfg.fps,
-        cameras=profile.camera_names,
+        image_size=image_size or features.image_size,
+        fps=fps,
+        cameras=features.camera_names,
         robot_home=world.robot_home,
-        profile=profile.name,
+        profile=features.name,
         world=world.name,
     )
+
+
+def sim_settings(cfg: GenConfig, world: worlds.World) -> SimSettings:
+    return world_sim(world, cfg.profile, cfg.image_size, cfg.fps)
+
+
+def default_sim(referent: Referent) -> SimSettings:
+    """The sim settings of a referent's world in its default profile (what tests plan with)."""
+    return world_sim(worlds.world(referent.config.world))
 
 
 def check_audit(report: dict) -> None:

@@ -31,9 +31,10 @@ OBJECT_FACES = 3000
 ROBOT_PREFIXES = ("robot0_", "gripper0_", "fixed_mount0_")
 
 
-def lighten(root: ET.Element, objects: bool = False) -> None:
+def lighten(root: ET.Element, objects: bool = False, keep: tuple[str, ...] = ()) -> None:
     """Replace the robot's large visual-only meshes in an MJCF tree by decimated inline meshes,
-    and (`objects`) the objects' textured ones too."""
+    and (`objects`) the objects' textured ones too, but for mesh files under the folders `keep`
+    (objects whose detail shows: LIBERO's woven basket)."""
     used, collides = set(), set()
     for geom in root.iter("geom"):
         if geom.get("mesh"):
@@ -45,7 +46,7 @@ def lighten(root: ET.Element, objects: bool = False) -> None:
         if not file or name not in used or name in collides:
             continue
         robot = name.startswith(ROBOT_PREFIXES)
-        if not robot and not (objects and file.endswith(".msh")):
+        if not robot and not (objects and file.endswith(".msh") and not file.startswith(keep)):
             continue
         light = decimated(file) if robot else textured(file)
         if light is None:

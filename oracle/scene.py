@@ -72,6 +72,13 @@ def _build_object(kind: catalog.Kind, name: str) -> rs_objects.MujocoObject:
     return getattr(rs_objects, kind.model)(name, **kind.params)
 
 
+def libero_folder(kind: catalog.Kind) -> Path:
+    """The folder of a LIBERO kind's model file."""
+    from core.worlds import libero
+
+    return (libero.assets_root() / kind.params["xml"]).parent
+
+
 def _libero_arena(world: worlds.World) -> Arena:
     """LIBERO's arena file with its floor and wall textures (LIBERO's EmptyArena), its cameras set
     as the world's problem class sets them."""
@@ -151,7 +158,8 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     if controller == NATIVE.controller:
         _servo_and_gravcomp(root)
     _configure(root, world)
-    meshes.lighten(root, objects=world.builder != "table")
+    keep = tuple(str(libero_folder(k)) for k in world.kinds.values() if k.params.get("detailed"))
+    meshes.lighten(root, objects=world.builder != "table", keep=keep)
     return ET.tostring(root, encoding="unicode")
 
 

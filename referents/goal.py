@@ -21,6 +21,9 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("objects", "needs two or more objects with role: destination and with role: object")
     if cfg.objects_per_scene != 4:
         raise cfg.fail("objects_per_scene", "goal scenes hold exactly 4 objects: carried, other, two destinations")
+    prepositions = cfg.extra.get("prepositions", {})
+    if not isinstance(prepositions, dict) or not all(isinstance(v, str) for v in prepositions.values()):
+        raise cfg.fail("prepositions", f"must map destination names to words, got {prepositions!r}")
 
 
 def _phrase(cfg: ReferentConfig, destination: Candidate) -> str:

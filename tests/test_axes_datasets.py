@@ -1,6 +1,7 @@
-"""`python -m gen referent=<type> n=24` for each of the nine types writes a dataset that lerobot
-loads, lerobot-doctor passes, whose every episode replays to success, and whose written
-episodes pass the same confound audit as the plan."""
+"""`python -m gen referent=<type> n=24` for each of the nine types of the native world writes a
+dataset that lerobot loads, lerobot-doctor passes, whose every episode replays to success, and
+whose written episodes pass the same confound audit as the plan (LIBERO's world:
+tests/test_libero_world.py)."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ from helpers import make_dataset
 from oracle.scene import scene_for
 
 
-@pytest.fixture(scope="module", params=referents.available())
+@pytest.fixture(scope="module", params=referents.of_world("native"))
 def dataset(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("axes") / request.param
     return make_dataset(out, f"referent={request.param}", "n=24", "image_size=64", "seed=2")

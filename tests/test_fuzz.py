@@ -81,7 +81,7 @@ def test_any_spec_file_plans_or_fails_naming_the_file(tmp_path: Path, spec: dict
     try:
         ref = referents.load("unused", str(path))
         plan = designs(ref, 6, seed=0)
-        audit(ref, [realize(ref, d, i, 0, SimSettings()) for i, d in enumerate(plan)])
+        audit(ref, [realize(ref, d, i, 0, SimSettings(world=ref.config.world)) for i, d in enumerate(plan)])
     except (ReferentSpecError, referents.UnknownReferent) as exc:
         assert str(exc).startswith(str(path)) or "referent" in str(exc)
         assert "\n" not in str(exc).strip()

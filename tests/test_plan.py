@@ -10,7 +10,7 @@ import pytest
 
 import referents
 from core.spec import SimSettings
-from gen.plan import plan
+from gen.plan import default_sim, plan
 
 SIMULATORS = {"mujoco", "robosuite", "mink"}
 
@@ -19,9 +19,9 @@ SIMULATORS = {"mujoco", "robosuite", "mink"}
 def test_planning_and_the_audit_import_no_simulator(referent: str) -> None:
     """Plan, exam plan, audit, alternatives and answers of every type, in a fresh interpreter."""
     code = (
-        "import sys, referents; from gen.plan import plan; from gen.audit import audit; from core.spec import SimSettings;"
-        f"r = referents.load({referent!r}); specs = plan(r, 12, seed=0, sim=SimSettings());"
-        "plan(r, 4, seed=0, sim=SimSettings(), split='exam'); audit(r, specs);"
+        "import sys, referents; from gen.plan import plan, default_sim; from gen.audit import audit;"
+        f"r = referents.load({referent!r}); specs = plan(r, 12, seed=0, sim=default_sim(r));"
+        "plan(r, 4, seed=0, sim=default_sim(r), split='exam'); audit(r, specs);"
         "[(r.alternatives(s), r.answer(s), r.assets()) for s in specs];"
         f"loaded = {sorted(SIMULATORS)!r} and set(sys.modules) & {SIMULATORS!r};"
         "assert not loaded, loaded"
@@ -35,7 +35,7 @@ def test_object_roles_are_balanced() -> None:
     names = [c.name for c in ref.config.objects]
     n_slots = len(ref.config.layout.slots)
     n = len(names) * n_slots  # enough episodes to cover every (object, slot) pair as target
-    specs = plan(ref, n, seed=11, sim=SimSettings())
+    specs = plan(ref, n, seed=11, sim=default_sim(ref))
     targets = Counter(s.object(s.target).name for s in specs)
     assert set(targets) == set(names)
     assert max(targets.values()) - min(targets.values()) <= 1
@@ -69,9 +69,9 @@ def test_counterfactuals_name_every_other_object() -> None:
 
 def test_plan_is_deterministic_per_seed() -> None:
     ref = referents.load("object")
-    a = [s.to_json() for s in plan(ref, 25, seed=9, sim=SimSettings())]
-    b = [s.to_json() for s in plan(ref, 25, seed=9, sim=SimSettings())]
-    c = [s.to_json() for s in plan(ref, 25, seed=10, sim=SimSettings())]
+    a = [s.to_json() for s in plan(ref, 25, seed=9, sim=default_sim(ref))]
+    b = [s.to_json() for s in plan(ref, 25, seed=9, sim=default_sim(ref))]
+    c = [s.to_json() for s in plan(ref, 25, seed=10, sim=default_sim(ref))]
     assert a == b
     assert a != c
 

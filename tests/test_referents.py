@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import referents
-from core.spec import EpisodeSpec, SimSettings
+from core.spec import EpisodeSpec
 from core.success import succeeded
 from gen.audit import audit
-from gen.plan import plan
+from gen.plan import default_sim, plan
 from helpers import visible_bodies
 from oracle.episode import replay
 from oracle.scene import scene_for
@@ -20,14 +20,16 @@ from oracle.scene import scene_for
 TYPES = referents.available()
 
 
-def test_all_nine_types_exist() -> None:
-    assert set(TYPES) == {"object", "color", "category", "ordinal", "relation", "negation", "composition", "goal", "verb"}
+def test_all_nine_types_exist_and_each_world_has_its_own() -> None:
+    native = {"object", "color", "category", "ordinal", "relation", "negation", "composition", "goal", "verb"}
+    assert set(referents.of_world("native")) == native
+    assert set(TYPES) == native | {"libero_object"} and referents.of_world("libero_object") == ["libero_object"]
 
 
 @pytest.fixture(scope="module", params=TYPES)
 def planned(request: pytest.FixtureRequest) -> tuple[referents.Referent, list[EpisodeSpec]]:
     ref = referents.load(request.param)
-    return ref, plan(ref, 300, seed=1, sim=SimSettings())
+    return ref, plan(ref, 300, seed=1, sim=default_sim(ref))
 
 
 def test_every_value_is_target_and_distractor_across_slots(planned: tuple) -> None:
@@ -70,13 +72,15 @@ def test_counterfactuals_ask_for_something_else_in_the_scene(planned: tuple) -> 
 @pytest.mark.parametrize("name", TYPES)
 def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
     ref = referents.load(name)
-    scene = scene_for(ref.assets())
-    for spec in plan(ref, 3, seed=4, sim=SimSettings()):
+    sim = default_sim(ref)
+    scene = scene_for(ref.assets(), sim.profile, sim.world)
+    for spec in plan(ref, 3, seed=4, sim=sim):
         scene.reset(spec)
         visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
-            assert visible.get(scene.placed[obj.id].body_id, 0) >= 8, f"{name}: {obj.id} not visible"
-        still = np.tile(np.array([*spec.sim.robot_home, -1.0], np.float32), (30, 1))
+            bodies = {int(scene.model.geom_bodyid[g]) for g in scene.placed[obj.id].geom_ids}
+            assert sum(visible.get(b, 0) for b in bodies) >= 8, f"{name}: {obj.id} not visible"
+        still = np.tile(sim.layout.hold_action(sim.robot_home), (30, 1))
         outcome = replay(scene, spec, still)
         assert not succeeded(spec, outcome)
         for cf in spec.counterfactuals:
@@ -91,7 +95,7 @@ def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
 
 def test_position_confound_is_flagged() -> None:
     ref = referents.load("object", overrides={"confound": "position"})
-    specs = plan(ref, 200, seed=0, sim=SimSettings())
+    specs = plan(ref, 200, seed=0, sim=default_sim(ref))
     assert {s.object(s.target).slot for s in specs} == {ref.config.layout.canonical_slot}
     report = audit(ref, specs)
     assert "slot" in report["leaks"] and report["verdict"].startswith("leak: ")
@@ -100,7 +104,7 @@ def test_position_confound_is_flagged() -> None:
 
 def test_holdout_and_distractor_only() -> None:
     ref = referents.load("color", overrides={"holdout": ["purple"], "distractor_only": ["orange"]})
-    specs = plan(ref, 120, seed=0, sim=SimSettings())
+    specs = plan(ref, 120, seed=0, sim=default_sim(ref))
     colors = Counter(o.attributes["color"] for s in specs for o in s.objects)
     targets = Counter(s.object(s.target).attributes["color"] for s in specs)
     assert "purple" not in colors
@@ -114,7 +118,7 @@ def test_restricted_targets_make_every_identity_leak_expected() -> None:
     """Families are declared with the features: the co-appearing categories of a category scene
     are identity, though no word in their name says so."""
     ref = referents.load("category", overrides={"targets": ["toy"]})
-    report = audit(ref, plan(ref, 120, seed=0, sim=SimSettings()))
+    report = audit(ref, plan(ref, 120, seed=0, sim=default_sim(ref)))
     leaked = {v["variable"]: v["expected"] for v in report["variables"] if v["leak"]}
     assert {"identity", "co-appearing categories"} <= set(leaked) and all(leaked.values())
     assert not report["unexpected_leaks"]
@@ -127,5 +131,5 @@ def test_unsupported_confound_is_refused() -> None:
 
 def test_tiny_plans_get_no_verdict() -> None:
     ref = referents.load("object")
-    report = audit(ref, plan(ref, 5, seed=5, sim=SimSettings()))
+    report = audit(ref, plan(ref, 5, seed=5, sim=default_sim(ref)))
     assert report["verdict"].startswith("too few episodes") and not report["leaks"]

