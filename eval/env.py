@@ -55,7 +55,10 @@ class ExamEnv(gym.Env):
                 raise ValueError(f"the exam has no rollout trial={trial} face={face} variant={variant}")
             self.row = match.iloc[0]
         else:
-            self.row = trials[trials["row"] == row].iloc[0]
+            match = trials[trials["row"] == row]
+            if match.empty:
+                raise ValueError(f"the exam has rows {trials['row'].min()}..{trials['row'].max()}, not row={row}")
+            self.row = match.iloc[0]
         self.episode = EpisodeSpec.from_json(self.row["spec"])
         self.render_mode = render_mode
         size = self.episode.sim.image_size

@@ -114,7 +114,14 @@ START_TOLERANCE = 0.002  # m: how far a logged step-0 object may sit from where 
 
 
 def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[str, np.ndarray], str | None, np.ndarray | None]]:
-    missing = set(exam.trials["row"]) - set(logs["row"])
+    rows = exam.trials["row"]
+    if not pd.api.types.is_integer_dtype(logs["row"]):
+        kind = type(logs["row"].iloc[0]).__name__ if len(logs) else logs["row"].dtype
+        raise LogError(f"column 'row' must hold integers (the exam's row numbers), got {kind}")
+    stray = sorted(set(logs["row"]) - set(rows))
+    if stray:
+        raise LogError(f"the logs hold row {stray[0]}, which the exam does not have (its rows are {rows.min()}..{rows.max()})")
+    missing = set(rows) - set(logs["row"])
     if missing:
         raise LogError(f"the logs lack {len(missing)} of the exam's {len(exam.trials)} rollouts (e.g. row {min(missing)})")
     twice = logs["row"][logs["row"].duplicated()]
@@ -127,8 +134,7 @@ def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[s
     }
     parsed = {}
     for _, log in logs.iterrows():
-        ee = np.asarray([np.asarray(p, float) for p in log["ee"]]).reshape(-1, 3)
-        objects = {k: np.asarray(v, float).reshape(-1, 3) for k, v in json.loads(log["objects"]).items()}
+        ee, objects = _positions(log)
         if not len(ee) or any(len(v) != len(ee) for v in objects.values()):
             raise LogError(f"row {log['row']}: every object needs one position per end-effector position")
         if int(log["row"]) in starts:
@@ -147,6 +153,29 @@ def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[s
         guess = None if located is None or (np.ndim(located) == 0 and pd.isna(located)) else np.asarray(located, float)
         parsed[int(log["row"])] = (ee, objects, error, guess)
     return parsed
+
+
+def _positions(log: pd.Series) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A log row's end-effector and object positions, or a LogError naming the column and the type it must have."""
+    row = log["row"]
+    try:
+        ee = np.asarray([np.asarray(p, float) for p in log["ee"]]).reshape(-1, 3)
+    except (TypeError, ValueError):
+        got = type(log["ee"]).__name__
+        raise LogError(
+            f"column 'ee' must hold each rollout's end-effector positions, a list of [x, y, z]; row {row} has a {got}"
+        ) from None
+    try:
+        decoded = json.loads(log["objects"])
+        if not isinstance(decoded, dict):
+            raise TypeError
+        objects = {str(k): np.asarray(v, float).reshape(-1, 3) for k, v in decoded.items()}
+    except (TypeError, ValueError):
+        got = type(log["objects"]).__name__
+        raise LogError(
+            f"column 'objects' must hold a JSON string {{object id: [[x, y, z], ...]}} per rollout; row {row} has a {got}"
+        ) from None
+    return ee, objects
 
 
 def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:

@@ -43,7 +43,14 @@ class Failed(Exception):
 
 
 def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
-    """`argv` overrides applied to the dataclass `schema` -> an instance of it."""
+    """`argv` overrides applied to the dataclass `schema` -> an instance of it. An option given
+    twice is refused (Hydra would silently keep the last)."""
+    seen: dict[str, str] = {}
+    for arg in argv:
+        key = arg.split("=", 1)[0].lstrip("+~")
+        if "=" in arg and key in seen:
+            raise UserError(f"option {key!r} is given twice ({seen[key]} and {arg}); give it once")
+        seen[key] = arg
     ConfigStore.instance().store(name=name, node=schema)
     try:
         with initialize(version_base=None, config_path=None):

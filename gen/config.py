@@ -6,7 +6,9 @@ naming it; the CLI prints that line and exits non-zero before anything is writte
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,11 +16,15 @@ from typing import List, Optional
 
 import referents
 from core import worlds
-from core.layout import layout
+from core.exam import EXAM_FORMAT
+from core.layout import FeatureLayout, layout
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.cli import UserError, compose_config
-from gen.partial import completed
+from gen.partial import GENERATION_PATH, completed
+from gen.scenes import SCENES_PATH
 from gen.video import CODECS
+
+DATASET_ENTRIES = {"meta", "data", "videos", "README.md", "preview.png", "images"}  # a dataset folder's own names
 
 
 @dataclass
@@ -26,7 +32,7 @@ class GenConfig:
     referent: str = "object"  # a referent type (referents/<type>.yaml)
     n: int = 20  # episodes
     seed: int = 0
-    out: Optional[str] = None  # output folder; default datasets/<referent>
+    out: Optional[str] = None  # output folder; default datasets/<referent> (split=exam: datasets/<referent>-exam)
     overwrite: bool = False  # replace a non-empty `out`
     resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
     image_size: Optional[int] = None  # square camera frames, pixels; default: the profile's (native 128, libero 256)
@@ -102,19 +108,69 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"backend must be process or ray, got {cfg.backend!r}")
     if cfg.max_attempts < 1:
         raise UserError(f"max_attempts must be at least 1, got {cfg.max_attempts}")
-    if cfg.objects_per_scene is not None and cfg.objects_per_scene < 1:
-        raise UserError(f"objects_per_scene must be at least 1, got {cfg.objects_per_scene}")
+    if cfg.objects_per_scene is not None and cfg.objects_per_scene < 2:
+        raise UserError(f"objects_per_scene must be at least 2 (a swap needs another object), got {cfg.objects_per_scene}")
     if cfg.out is None:
         cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
+    check_size(cfg, profile)
     try:
         check_output(Path(cfg.out), cfg.overwrite or cfg.resume and completed(Path(cfg.out)) is not None)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
 
 
+# What a run needs, measured: planning holds ~11.7 KB of memory per episode (a 20,000-episode
+# object plan peaked 210 MB above a 2,000-episode one); a plan's scene records take ~0.43 KB of
+# disk per episode, and a dataset's videos about half a byte per recorded pixel (~150 frames at most).
+PLAN_MEMORY, PLAN_DISK, VIDEO_BYTES_PER_PIXEL, MAX_FRAMES = 12_000, 500, 0.5, 150
+
+
+def check_size(cfg: GenConfig, profile: FeatureLayout) -> None:
+    """Refuse an `n` whose plan could not fit in this machine's memory, or whose product could
+    not fit on the disk under `out`, with the estimate."""
+    memory = _available_memory()
+    need = cfg.n * PLAN_MEMORY
+    if memory is not None and need > memory:
+        raise UserError(
+            f"n={cfg.n} needs about {_size(need)} of memory to plan ({_size(PLAN_MEMORY)} per episode), "
+            f"more than the {_size(memory)} available; plan fewer episodes"
+        )
+    pixels = MAX_FRAMES * len(profile.cameras) * (cfg.image_size or profile.image_size) ** 2
+    per_episode = PLAN_DISK if cfg.plan_only or cfg.split == "exam" else PLAN_DISK + VIDEO_BYTES_PER_PIXEL * pixels
+    existing = Path(str(cfg.out)).resolve()
+    while not existing.exists():
+        existing = existing.parent
+    free = shutil.disk_usage(existing).free
+    if cfg.n * per_episode > free:
+        raise UserError(
+            f"n={cfg.n} would write about {_size(cfg.n * per_episode)} ({_size(per_episode)} per episode), "
+            f"more than the {_size(free)} free under {existing}"
+        )
+
+
+def _available_memory() -> int | None:
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "KB", "MB", "GB", "TB", "PB"):
+        if n < 1000:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1000
+    return f"{n:.1f} EB"
+
+
 def resolve_world(cfg: GenConfig) -> worlds.World:
     """The world a run's scenes happen in: the referent's, which `world=` may only confirm;
     its files must be installed."""
+    if cfg.spec is None and cfg.referent not in referents.available():
+        raise UserError(f"unknown referent {cfg.referent!r}; available: {', '.join(referents.available())}")
     home = referents.world_of(cfg.referent, cfg.spec)
     try:
         world = worlds.world(cfg.world or home)
@@ -134,15 +190,28 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
 
 
 def check_output(out: Path, overwrite: bool) -> None:
-    """`out` must be creatable and writable, and empty unless `overwrite`.
+    """`out` must be creatable and writable, and empty unless `overwrite`, which replaces only a
+    folder this project wrote (a dataset, a plan, an exam): a product is published by renaming
+    it to `out`, so `out` can be neither a folder of someone else's files nor the current one.
 
     Writability is tested by creating (and removing) a folder where the dataset will be staged:
     permission bits alone say nothing for root or on read-only mounts.
     """
     if out.exists() and not out.is_dir():
         raise UserError(f"out={out} exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
+    here = Path.cwd().resolve()
+    if out.resolve() == here or out.resolve() in here.parents:
+        raise UserError(f"out={out} is the current folder (or holds it), which cannot be replaced; choose a folder inside it")
+    if out.is_dir() and any(out.iterdir()):
+        if not overwrite:
+            raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
+        if product_in(out) is None:
+            found = sorted(p.name for p in out.iterdir())
+            listed = ", ".join(found[:3]) + (f" and {len(found) - 3} more" if len(found) > 3 else "")
+            raise UserError(
+                f"out={out} holds files this project did not write ({listed}); overwrite=true replaces only a dataset, "
+                "plan or exam made here: choose another out"
+            )
     parent = out.resolve().parent
     while not parent.exists():
         parent = parent.parent
@@ -150,3 +219,23 @@ def check_output(out: Path, overwrite: bool) -> None:
         os.rmdir(tempfile.mkdtemp(prefix=".deconfound-write-test-", dir=parent))
     except OSError as exc:
         raise UserError(f"out={out} is not writable ({exc.strerror or exc} in {parent})") from None
+
+
+def product_in(folder: Path) -> str | None:
+    """What this project wrote in `folder` ("dataset", "plan", "exam"), or None if it holds
+    anything else: a finished or partially assembled dataset or plan (LeRobot's meta files and
+    our scene records), or an exam (exam.json of our format)."""
+    try:
+        generation = json.loads((folder / GENERATION_PATH).read_text())
+        if generation.get("generator") == "deconfound":
+            return "plan" if generation.get("plan_only") else "dataset"
+    except (OSError, ValueError, AttributeError):
+        pass
+    try:
+        if json.loads((folder / "exam.json").read_text()).get("format") == EXAM_FORMAT:
+            return "exam"
+    except (OSError, ValueError, AttributeError):
+        pass
+    if (folder / SCENES_PATH).is_file() and {p.name for p in folder.iterdir()} <= DATASET_ENTRIES:
+        return "dataset"
+    return None

@@ -10,8 +10,9 @@ throwaway folder and published whole.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,8 +24,13 @@ from gen.config import GenConfig
 from gen.partial import staging
 from gen.plan import Planned
 from gen.provenance import Provenance
+from referents import Referent
 
-HORIZON_FACTOR, HORIZON_SLACK = 1.5, 20  # rollout steps allowed: 1.5x the oracle's demo, plus 20
+if TYPE_CHECKING:
+    from gen.produce import Producer
+    from oracle.episode import Demo
+
+HORIZON_FACTOR, HORIZON_SLACK = 1.5, 20  # rollout steps allowed: 1.5x the longest oracle demo of the trial, plus 20
 
 
 @dataclass
@@ -66,13 +72,26 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
             demo, _ = producer.demonstrate(design, i, cfg.seed, cfg.max_attempts, split="exam")
         except DemoFailed as exc:
             raise UserError(f"{exc}; the referent spec may place objects out of reach") from None
+        horizon = int(np.ceil(HORIZON_FACTOR * _longest(producer, referent, demo))) + HORIZON_SLACK
         producer.scene.reset(demo.spec)
         state = producer.scene.physics_state().astype(np.float64).tolist()
         ee = [float(v) for v in producer.scene.ee_pos()]
-        horizon = int(np.ceil(HORIZON_FACTOR * len(demo.actions))) + HORIZON_SLACK
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
         rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee)
     return rows
+
+
+def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:
+    """The longest demonstration among the trial's programs: every row of a trial gets the same
+    horizon, so how long a rollout may run never tells which program its instruction asks for
+    (a verb exam's swaps ask for another one than the task)."""
+    from oracle.episode import demonstrate
+
+    spec, longest = demo.spec, len(demo.actions)
+    for target, program in sorted({spec.choice(cf) for cf in spec.counterfactuals if spec.choice(cf)[1] != spec.task.program}):
+        asked = replace(spec, target=target, task=replace(spec.task, program=program))
+        longest = max(longest, len(demonstrate(producer.scene, producer.ik, asked, referent.demo).actions))
+    return longest
 
 
 def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:

@@ -26,6 +26,7 @@ from tqdm import tqdm
 
 from gen.check import Broken, check
 from gen.cli import Failed, UserError, main
+from gen.config import product_in
 from gen.lerobot_reader import INFO_PATH, LeRobotReader
 from gen.video import cut
 
@@ -119,6 +120,8 @@ def export(options: ExportOptions) -> None:
         raise UserError(f"out={out} is inside the source dataset {source}; export somewhere else")
     if out.exists() and any(out.iterdir()) and not options.overwrite:
         raise UserError(f"{out} exists and is not empty; pass overwrite=true to replace it")
+    if out.exists() and any(out.iterdir()) and product_in(out) is None:
+        raise UserError(f"out={out} holds files this project did not write; overwrite=true replaces only an earlier export")
     try:
         check(source)
     except Broken as exc:

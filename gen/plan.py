@@ -9,6 +9,7 @@ starts from: a plan whose confound audit finds a leak nobody asked for goes no f
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,11 +30,16 @@ from referents.schema import ReferentSpecError
 SPLITS = {"train": (), "exam": (0xE7A3,)}
 
 
+PROGRESS_FROM = 10_000  # plans of this many episodes or more show a progress bar while they are drawn
+
+
 def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list[Design]:
     """The plan's roles. A spec whose values cannot fill a scene fails here, naming the file."""
+    from tqdm import tqdm
+
     balance = Balance(np.random.default_rng([seed, *SPLITS[split]] if SPLITS[split] else seed))
     try:
-        return [referent.design(balance) for _ in range(n)]
+        return [referent.design(balance) for _ in tqdm(range(n), desc="planning", unit="ep", disable=n < PROGRESS_FROM)]
     except ReferentSpecError:
         raise
     except (ValueError, KeyError, IndexError, TypeError) as exc:
@@ -139,6 +145,8 @@ def plan_and_audit(cfg: GenConfig) -> Planned:
     except ReferentSpecError as exc:
         raise UserError(str(exc)) from None
     specs = [realize(referent, d, i, cfg.seed, sim, split=cfg.split) for i, d in enumerate(roles)]
+    if cfg.n >= PROGRESS_FROM:
+        print(f"auditing the plan of {cfg.n} episodes ...", file=sys.stderr)
     report = audit(referent, specs)
     check_audit(report)
     return Planned(referent, sim, roles, specs, report)

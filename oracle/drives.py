@@ -2,13 +2,13 @@
 
 * `JointServo` (native): seven joint-position targets held by position servos with gravity
   compensation, and a gripper command mapped straight to the finger targets.
-* `OscPose` (libero): LIBERO's arm controller. robosuite's own `OperationalSpaceController`
+* `OscPose` (libero): LIBERO's arm controller, robosuite's `OperationalSpaceController`
   (OSC_POSE: delta input in the world frame, kp 150, damping ratio 1, output limits 0.05 m /
-  0.5 rad, position and orientation uncoupled, nullspace pull to the home joints) runs on our
-  compiled model through robosuite's `MjSim` binding, once per physics substep as robosuite's
-  environments call it, the goal set from the action on the first substep of each control
-  period. The gripper follows robosuite 1.4's PandaGripper, which LIBERO ran: the sign of the
-  command moves the finger targets 0.01 of their range per substep.
+  0.5 rad, position and orientation uncoupled, nullspace pull to the home joints), computed by
+  robosuite's own functions once per physics substep as robosuite's environments call it, the
+  goal set from the action on the first substep of each control period. The gripper follows
+  robosuite 1.4's PandaGripper, which LIBERO ran: the sign of the command moves the finger
+  targets 0.01 of their range per substep.
 
 A drive is made for one `Scene` (oracle/scene.py) and shares its model and data.
 """
@@ -60,48 +60,79 @@ class JointServo:
 
 
 class OscPose:
-    def __init__(self, sim, arm_joints: tuple[str, ...], ee_site: str) -> None:  # noqa: ANN001
-        """`sim`: robosuite's `MjSim` binding of the scene's model; its data is the scene's."""
-        from robosuite.controllers.parts.arm.osc import OperationalSpaceController
+    """robosuite's OSC_POSE controller (robosuite/controllers/parts/arm/osc.py), its equations
+    computed by robosuite's own functions (`opspace_matrices`, `nullspace_torques`,
+    `orientation_error`, the axis-angle and quaternion conversions) on the scene's state read
+    directly: robosuite's controller object spends most of a step looking names up and copying
+    arrays. tests/test_libero.py checks that both drive the arm along the same path (to 1e-9)."""
 
-        m = sim.model._model
-        ids = [m.joint(j).id for j in arm_joints]
-        self.model, self.data = m, sim.data._data
-        self.osc = OperationalSpaceController(
-            sim,
-            ref_name=ee_site,
-            joint_indexes={
-                "joints": ids,
-                "qpos": [int(m.jnt_qposadr[i]) for i in ids],
-                "qvel": [int(m.jnt_dofadr[i]) for i in ids],
-            },
-            actuator_range=(m.actuator_ctrlrange[: len(ids), 0].copy(), m.actuator_ctrlrange[: len(ids), 1].copy()),
-            output_max=(OSC_POS_LIMIT,) * 3 + (OSC_ORI_LIMIT,) * 3,
-            output_min=(-OSC_POS_LIMIT,) * 3 + (-OSC_ORI_LIMIT,) * 3,
-            kp=OSC_KP,
-            damping_ratio=OSC_DAMPING_RATIO,
-            input_ref_frame="world",
-            uncouple_pos_ori=True,
-            lite_physics=True,
-            part_name="right",
-            naming_prefix="robot0_",
-        )
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, arm_joints: tuple[str, ...], ee_site: str) -> None:
+        ids = [model.joint(j).id for j in arm_joints]
+        self.model, self.data = model, data
+        self.qpos_index = np.array([model.jnt_qposadr[i] for i in ids])
+        self.dof = np.array([model.jnt_dofadr[i] for i in ids])
+        self.site = model.site(ee_site).id
+        self.low, self.high = model.actuator_ctrlrange[: len(ids), 0].copy(), model.actuator_ctrlrange[: len(ids), 1].copy()
+        self.kp = np.full(6, OSC_KP)
+        self.kd = 2 * np.sqrt(self.kp) * OSC_DAMPING_RATIO
+        output = np.array((OSC_POS_LIMIT,) * 3 + (OSC_ORI_LIMIT,) * 3)
+        self.scale = abs(output - -output) / abs(np.ones(6) - -np.ones(6))  # robosuite's scale_action, inputs in [-1, 1]
+        nv = model.nv
+        self._jacp, self._jacr, self._mass = np.zeros((3, nv)), np.zeros((3, nv)), np.zeros((nv, nv))
+        self.initial_joint = np.zeros(len(ids))  # the nullspace target
+        self.goal_pos, self.goal_ori = np.zeros(3), np.eye(3)
         self.fingers = np.zeros(2)  # robosuite's gripper `current_action`: [-1, 1] per finger
 
+    def _update(self) -> None:
+        """robosuite's Controller.update with lite physics: the state after mj_step1."""
+        m, d = self.model, self.data
+        mujoco.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
+        self.J_pos, self.J_ori = np.array(self._jacp[:, self.dof]), np.array(self._jacr[:, self.dof])
+        self.J_full = np.vstack([self.J_pos, self.J_ori])
+        self.ref_pos, self.ref_ori = np.array(d.site_xpos[self.site]), np.array(d.site_xmat[self.site].reshape(3, 3))
+        self.vel_pos, self.vel_ori = np.dot(self._jacp, d.qvel), np.dot(self._jacr, d.qvel)
+        self.joint_pos, self.joint_vel = np.array(d.qpos[self.qpos_index]), np.array(d.qvel[self.dof])
+        mujoco.mj_fullM(m, self._mass, d.qM)
+        self.mass = self._mass[self.dof, :][:, self.dof]
+
     def reset(self, home: np.ndarray) -> None:
-        self.osc.update_initial_joints(np.asarray(home, float))  # the nullspace target; the goal becomes the current pose
+        """robosuite's update_initial_joints: the nullspace target is `home`, the goal the current pose."""
+        mujoco.mj_forward(self.model, self.data)
+        self._update()
+        self.initial_joint = np.array(home, float)
+        self.goal_pos, self.goal_ori = np.array(self.ref_pos), np.array(self.ref_ori)
         half = FINGER_OPEN / 2
         self.fingers = np.array([self.data.ctrl[7] / half - 1.0, 1.0 + self.data.ctrl[8] / half])
 
+    def _set_goal(self, action: np.ndarray) -> None:
+        """robosuite's set_goal: delta input in the world frame, goals from the achieved pose."""
+        import robosuite.utils.transform_utils as T
+
+        delta = np.clip(action, -1.0, 1.0) * self.scale
+        self.goal_pos = self.ref_pos + delta[0:3]
+        self.goal_ori = np.dot(T.quat2mat(T.axisangle2quat(delta[3:6])), self.ref_ori)
+
+    def _torques(self) -> np.ndarray:
+        """robosuite's OperationalSpaceController.run_controller, uncoupled position and orientation."""
+        from robosuite.utils.control_utils import nullspace_torques, opspace_matrices, orientation_error
+
+        # the base is fixed: robosuite subtracts its site's velocity, which is zero
+        desired_force = np.multiply(self.goal_pos - self.ref_pos, self.kp[0:3]) + np.multiply(-self.vel_pos, self.kd[0:3])
+        ori_error = orientation_error(self.goal_ori, self.ref_ori)
+        desired_torque = np.multiply(np.array(ori_error), self.kp[3:6]) + np.multiply(-self.vel_ori, self.kd[3:6])
+        _, lambda_pos, lambda_ori, nullspace = opspace_matrices(self.mass, self.J_full, self.J_pos, self.J_ori)
+        wrench = np.concatenate([np.dot(lambda_pos, desired_force), np.dot(lambda_ori, desired_torque)])
+        torques = np.dot(self.J_full.T, wrench) + self.data.qfrc_bias[self.dof]
+        return torques + nullspace_torques(self.mass, nullspace, self.initial_joint, self.joint_pos, self.joint_vel)
+
     def step(self, action: np.ndarray, substeps: int) -> None:
-        d = self.data
-        n = len(self.osc.qpos_index)
+        d, n = self.data, len(self.dof)
         for k in range(substeps):
             mujoco.mj_step1(self.model, d)  # kinematics, mass matrix and bias forces for the controller
+            self._update()
             if k == 0:
-                self.osc.set_goal(np.asarray(action[:6], float))
-            torques = self.osc.run_controller()
-            d.ctrl[:n] = np.clip(torques, self.osc.actuator_min, self.osc.actuator_max)
+                self._set_goal(np.asarray(action[:6], float))
+            d.ctrl[:n] = np.clip(self._torques(), self.low, self.high)
             self.fingers = np.clip(self.fingers + np.array([-1.0, 1.0]) * GRIPPER_SPEED * np.sign(action[6]), -1.0, 1.0)
             d.ctrl[n : n + 2] = FINGER_OPEN / 2 * (1.0 + self.fingers[0]), -FINGER_OPEN / 2 * (1.0 - self.fingers[1])
             mujoco.mj_step2(self.model, d)

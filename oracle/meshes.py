@@ -31,10 +31,11 @@ OBJECT_FACES = 3000
 ROBOT_PREFIXES = ("robot0_", "gripper0_", "fixed_mount0_")
 
 
-def lighten(root: ET.Element, objects: bool = False, keep: tuple[str, ...] = ()) -> None:
+def lighten(root: ET.Element, objects: bool = False, faces: dict[str, int] | None = None, robot_faces: int = MAX_FACES) -> None:
     """Replace the robot's large visual-only meshes in an MJCF tree by decimated inline meshes,
-    and (`objects`) the objects' textured ones too, but for mesh files under the folders `keep`
-    (objects whose detail shows: LIBERO's woven basket)."""
+    and (`objects`) the objects' textured ones too: to `OBJECT_FACES` triangles, or to
+    `faces[folder]` for the meshes under a folder (an object whose detail shows: LIBERO's woven
+    basket)."""
     used, collides = set(), set()
     for geom in root.iter("geom"):
         if geom.get("mesh"):
@@ -46,9 +47,10 @@ def lighten(root: ET.Element, objects: bool = False, keep: tuple[str, ...] = ())
         if not file or name not in used or name in collides:
             continue
         robot = name.startswith(ROBOT_PREFIXES)
-        if not robot and not (objects and file.endswith(".msh") and not file.startswith(keep)):
+        if not robot and not (objects and file.endswith(".msh")):
             continue
-        light = decimated(file) if robot else textured(file)
+        target = next((n for folder, n in (faces or {}).items() if file.startswith(folder)), OBJECT_FACES)
+        light = decimated(file, robot_faces) if robot else textured(file, target)
         if light is None:
             continue
         del mesh.attrib["file"]
@@ -80,56 +82,56 @@ def _cached(file: str, tag: str, make: Callable[[Path], dict[str, np.ndarray] | 
 
 
 @functools.cache
-def decimated(file: str) -> dict[str, np.ndarray] | None:
-    """{vertices, faces} of the mesh file cut to `MAX_FACES` triangles, or None if it is smaller."""
-    return _cached(file, str(MAX_FACES), _decimate)
+def decimated(file: str, faces: int = MAX_FACES) -> dict[str, np.ndarray] | None:
+    """{vertices, faces} of the mesh file cut to `faces` triangles, or None if it is smaller."""
+    return _cached(file, str(faces), functools.partial(_decimate, faces=faces))
 
 
 @functools.cache
-def textured(file: str) -> dict[str, np.ndarray] | None:
-    """{vertices, texcoords, faces} of a textured MuJoCo .msh file cut to `OBJECT_FACES`
-    triangles, or None if it is smaller."""
-    return _cached(file, f"uv{OBJECT_FACES}", _decimate_textured)
+def textured(file: str, faces: int = OBJECT_FACES) -> dict[str, np.ndarray] | None:
+    """{vertices, texcoords, faces} of a textured MuJoCo .msh file cut to `faces` triangles, or
+    None if it is smaller."""
+    return _cached(file, f"uv{faces}", functools.partial(_decimate_textured, faces=faces))
 
 
-def _decimate(path: Path) -> dict[str, np.ndarray] | None:
+def _decimate(path: Path, faces: int) -> dict[str, np.ndarray] | None:
     import fast_simplification
 
-    vertices, faces = _read(path)
-    if len(faces) <= MAX_FACES:
+    vertices, triangles = _read(path)
+    if len(triangles) <= faces:
         return None
     # Weld vertices that the file repeats per normal/uv, so the surface is connected.
     unique, inverse = np.unique(np.round(vertices, 6), axis=0, return_inverse=True)
-    faces = _proper(inverse.reshape(-1)[faces])
-    points, triangles = fast_simplification.simplify(unique, faces, target_count=MAX_FACES)
+    triangles = _proper(inverse.reshape(-1)[triangles])
+    points, triangles = fast_simplification.simplify(unique, triangles, target_count=faces)
     return {"vertices": np.asarray(points, np.float64), "faces": np.asarray(triangles, np.int64)}
 
 
-def _decimate_textured(path: Path) -> dict[str, np.ndarray] | None:
+def _decimate_textured(path: Path, faces: int) -> dict[str, np.ndarray] | None:
     """Quadric edge collapses chosen on the surface welded by position and texture coordinate,
     then replayed by merging each collapsed vertex into its survivor: survivors keep their own
     position and texture coordinate, and texture seams (a position with two coordinates) stay
     open borders that collapses keep."""
     import fast_simplification
 
-    vertices, texcoords, faces = _read_msh(path)
-    if len(faces) <= OBJECT_FACES:
+    vertices, texcoords, triangles = _read_msh(path)
+    if len(triangles) <= faces:
         return None
     key = np.concatenate([np.round(vertices, 6), np.round(texcoords, 6)], axis=1)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     vertices, texcoords = vertices[first], texcoords[first]
-    faces = _proper(inverse.reshape(-1)[faces])
+    triangles = _proper(inverse.reshape(-1)[triangles])
     _, _, collapses = fast_simplification.simplify(
-        np.ascontiguousarray(vertices), np.ascontiguousarray(faces), target_count=OBJECT_FACES, return_collapses=True
+        np.ascontiguousarray(vertices), np.ascontiguousarray(triangles), target_count=faces, return_collapses=True
     )
     survivor = np.arange(len(vertices))
     for kept, gone in collapses:
         survivor[gone] = kept
     while not np.array_equal(survivor[survivor], survivor):  # follow chains of collapses to their end
         survivor = survivor[survivor]
-    faces = _proper(survivor[faces])
-    used, faces = np.unique(faces, return_inverse=True)
-    return {"vertices": vertices[used], "texcoords": texcoords[used], "faces": faces.reshape(-1, 3).astype(np.int64)}
+    triangles = _proper(survivor[triangles])
+    used, triangles = np.unique(triangles, return_inverse=True)
+    return {"vertices": vertices[used], "texcoords": texcoords[used], "faces": triangles.reshape(-1, 3).astype(np.int64)}
 
 
 def _proper(faces: np.ndarray) -> np.ndarray:

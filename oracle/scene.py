@@ -158,8 +158,8 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     if controller == NATIVE.controller:
         _servo_and_gravcomp(root)
     _configure(root, world)
-    keep = tuple(str(libero_folder(k)) for k in world.kinds.values() if k.params.get("detailed"))
-    meshes.lighten(root, objects=world.builder != "table", keep=keep)
+    faces = {str(libero_folder(k)): k.params["faces"] for k in world.kinds.values() if "faces" in k.params}
+    meshes.lighten(root, objects=world.builder != "table", faces=faces, robot_faces=world.robot_faces)
     return ET.tostring(root, encoding="unicode")
 
 
@@ -191,16 +191,9 @@ class Scene:
         self.world = worlds.world(world)
         self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world))
         m = self.model
-        self.drive: Drive
-        if self.layout.controller == NATIVE.controller:
-            self.data = mujoco.MjData(m)
-            self.drive = JointServo(m, self.data)
-        else:
-            from robosuite.utils.binding_utils import MjSim
-
-            sim = MjSim(m)
-            self.data = sim.data._data
-            self.drive = OscPose(sim, ARM_JOINTS, EE_SITE)
+        self.data = mujoco.MjData(m)
+        servo = self.layout.controller == NATIVE.controller
+        self.drive: Drive = JointServo(m, self.data) if servo else OscPose(m, self.data, ARM_JOINTS, EE_SITE)
         self.arm_qpos = np.array([m.joint(j).qposadr[0] for j in ARM_JOINTS])
         self.finger_qpos = np.array([m.joint(j).qposadr[0] for j in FINGER_JOINTS])
         self.ee_site = m.site(EE_SITE).id

@@ -137,6 +137,8 @@ class ReferentConfig:
                     raise fail(option, f"{v!r} names no object of this referent")
             vocabulary[option] = values
         objects = [c for c in objects if not any(c.matches(v) for v in vocabulary["holdout"])]
+        if not objects:
+            raise fail("holdout", f"holds out every object ({', '.join(vocabulary['holdout'])}); nothing is left to place")
         only = vocabulary["targets"]
         objects = [
             replace(
@@ -148,8 +150,8 @@ class ReferentConfig:
         ]
         layout = _layout(data.pop("layout"), fail, world)
         k = data.pop("objects_per_scene")
-        if not isinstance(k, int) or k < 1:
-            raise fail("objects_per_scene", f"must be a positive integer, got {k!r}")
+        if not isinstance(k, int) or isinstance(k, bool) or k < 2:
+            raise fail("objects_per_scene", f"must be an integer of at least 2 (a swap needs another object), got {k!r}")
         if k > len(layout.slots):
             raise fail("objects_per_scene", f"{k} objects cannot fit in the {len(layout.slots)} slots of layout.slots")
         if not any(c.targetable for c in objects):

@@ -4,6 +4,7 @@ clear failures for bad exams, bad actions and unreachable servers."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -207,3 +208,33 @@ def test_gym_environment_replays_a_trial(small_exam: Path) -> None:
         obs, reward, terminated, truncated, info = env.step(action)
     assert reward == 1.0 and info["achieved"]
     env.close()
+
+
+@pytest.mark.parametrize("row", [999, -1])
+def test_the_gym_environment_names_the_rows_an_exam_has(small_exam: Path, row: int) -> None:
+    import gymnasium as gym
+
+    last = int(read(small_exam).trials["row"].max())
+    with pytest.raises(ValueError, match=rf"^the exam has rows 0..{last}, not row={row}$"):
+        gym.make("deconfound_exam:deconfound/Exam-v0", exam=small_exam, row=row, disable_env_checker=True)
+
+
+def test_a_verb_exams_horizon_does_not_tell_the_program(tmp_path: Path) -> None:
+    """Every row of a trial runs under one horizon, long enough for the longest of its programs:
+    the oracle's demonstration of any row's ask fits in it with the usual margin."""
+    from core.spec import EpisodeSpec
+    from gen.exam import HORIZON_FACTOR, HORIZON_SLACK
+    from oracle.episode import demonstrate
+    from oracle.ik import ArmIK
+    from oracle.scene import scene_for
+    from referents import demo_of
+
+    exam = read(make_dataset(tmp_path / "verb-exam", "referent=verb", "n=4", "split=exam", "seed=2", "image_size=32"))
+    assert (exam.trials.groupby("trial")["max_steps"].nunique() == 1).all()
+    spec = EpisodeSpec.from_json(exam.trials["spec"].iloc[0])
+    scene, ik = scene_for(spec.assets), ArmIK(np.asarray(spec.sim.robot_home))
+    for _, row in exam.trials[exam.trials["face"].isin(["task", "swap"])].iterrows():
+        spec = EpisodeSpec.from_json(row["spec"])
+        asked = dataclasses.replace(spec, target=row["target"], task=dataclasses.replace(spec.task, program=row["program"]))
+        steps = len(demonstrate(scene, ik, asked, demo_of("verb")).actions)
+        assert HORIZON_FACTOR * steps + HORIZON_SLACK <= row["max_steps"] + 1, (row["trial"], row["program"], steps)

@@ -42,18 +42,22 @@ def _untouched(out: Path) -> bool:
         (["profile=openvla"], "unknown profile 'openvla'; known: native, libero"),
         (["n"], "key=value"),
         (["world=mars"], "unknown world 'mars'; known: native, libero_object"),
+        (["n=2", "n=3"], "option 'n' is given twice (n=2 and n=3); give it once"),
+        (["objects_per_scene=1"], "objects_per_scene must be at least 2 (a swap needs another object), got 1"),
+        (["holdout=[milk carton,soda can,bottle,bread,cereal box,lemon]"], "holdout: holds out every object"),
         (["referent=libero_object", "profile=native"], "world libero_object is recorded in profile libero only"),
         (["referent=object", "world=libero_object"], "referent object's scenes are in world native, not libero_object"),
         (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
         (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
     ],
 )
-def test_bad_options_get_one_line(existing: Path, args: list[str], needle: str) -> None:
-    result = run_gen(*args, f"out={existing}", "overwrite=true")
+def test_bad_options_get_one_line(tmp_path: Path, args: list[str], needle: str) -> None:
+    out = tmp_path / "new"
+    result = run_gen(*args, f"out={out}")
     assert result.returncode != 0
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], result.stderr
-    assert _untouched(existing)
+    assert not out.exists() and [p.name for p in tmp_path.iterdir()] == []
 
 
 def test_a_missing_libero_package_is_named(tmp_path: Path, existing: Path) -> None:
@@ -101,12 +105,27 @@ def test_bad_spec_file_is_named(tmp_path: Path, existing: Path) -> None:
     assert _untouched(existing)
 
 
-def test_overwrite_replaces_only_when_done(existing: Path) -> None:
-    result = run_gen("n=1", "image_size=32", f"out={existing}", "overwrite=true")
-    assert result.returncode == 0, result.stderr
-    assert (existing / "meta/info.json").exists() and not (existing / "keep.txt").exists()
-    assert "wrote 1 episodes" in result.stdout
-    assert not [p for p in existing.parent.iterdir() if p.name.startswith(".")], "staging left behind"
+def test_overwrite_replaces_only_what_this_project_wrote(existing: Path, tmp_path: Path) -> None:
+    """A folder of the user's own files is never replaced: one line names what is there."""
+    for product in (["n=1", "image_size=32"], ["n=2", "plan_only=true"], ["n=1", "split=exam", "image_size=32"]):
+        refused = run_gen(*product, f"out={existing}", "overwrite=true")
+        lines = refused.stderr.strip().splitlines()
+        assert refused.returncode == 2 and len(lines) == 1 and "keep.txt" in lines[0] and "did not write" in lines[0], lines
+        assert _untouched(existing)
+    ours = tmp_path / "ours"
+    for product in (["n=2", "plan_only=true"], ["n=1", "image_size=32"], ["n=1", "split=exam", "image_size=32"]):
+        result = run_gen(*product, f"out={ours}", "overwrite=true")  # each replaces the product before it
+        assert result.returncode == 0, result.stderr
+    assert (ours / "exam.json").exists() and not (ours / "meta").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "staging left behind"
+
+
+def test_out_cannot_be_the_current_folder(tmp_path: Path) -> None:
+    for out in (".", str(tmp_path)):
+        result = run_gen("n=2", "plan_only=true", f"out={out}", "overwrite=true", cwd=tmp_path)
+        lines = result.stderr.strip().splitlines()
+        assert result.returncode == 2 and len(lines) == 1 and "is the current folder" in lines[0], result.stderr
+    assert not any(tmp_path.iterdir())
 
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -208,3 +227,24 @@ def test_the_canonical_exam_refuses_bad_values(option: str, needle: str, existin
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2 and len(lines) == 1 and needle in lines[0], result.stderr
     assert _untouched(existing)
+
+
+def test_a_plan_too_large_for_this_machine_is_refused_with_the_estimate(tmp_path: Path) -> None:
+    result = run_gen("n=1000000000", "plan_only=true", f"out={tmp_path / 'big'}")
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1, result.stderr
+    assert "n=1000000000 needs about 12.0 TB of memory to plan" in lines[0] and "available" in lines[0]
+    assert not any(tmp_path.iterdir())
+
+
+def test_a_large_plan_shows_its_progress(tmp_path: Path) -> None:
+    result = run_gen("n=10000", "plan_only=true", f"out={tmp_path / 'plan'}")
+    assert result.returncode == 0, result.stderr
+    assert "planning: 100%" in result.stderr and "10000/10000" in result.stderr
+
+
+def test_help_says_where_an_exam_goes_by_default() -> None:
+    shown = run_gen("--help")
+    assert "default datasets/<referent> (split=exam: datasets/<referent>-exam)" in shown.stdout
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    assert "`datasets/<referent>` (`datasets/<referent>-exam` with `split=exam`)" in readme

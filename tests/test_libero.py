@@ -70,6 +70,61 @@ def test_recorded_deltas_replay_through_the_controller_to_the_same_success(liber
         assert np.abs(np.diff(states[:, :3], axis=0)).max() <= 2 * OSC_POS_LIMIT
 
 
+def test_the_drive_moves_the_arm_as_robosuites_own_controller(libero_dataset: Path) -> None:
+    """OscPose computes robosuite's OSC_POSE with robosuite's functions on state it reads itself;
+    robosuite's OperationalSpaceController object, stepped the same way on the same recorded
+    actions, moves every joint the same to within 1e-9."""
+    from robosuite.controllers.parts.arm.osc import OperationalSpaceController
+    from robosuite.utils.binding_utils import MjSim
+
+    from oracle import drives
+    from oracle.scene import ARM_JOINTS, EE_SITE
+
+    class Robosuites(drives.OscPose):  # the controller object in place of OscPose's own equations
+        def __init__(self, model, data) -> None:  # noqa: ANN001
+            super().__init__(model, data, ARM_JOINTS, EE_SITE)
+            sim = MjSim(model)
+            sim.data._data = data
+            ids = [model.joint(j).id for j in ARM_JOINTS]
+            self.osc = OperationalSpaceController(
+                sim, ref_name=EE_SITE, joint_indexes={"joints": ids, "qpos": list(self.qpos_index), "qvel": list(self.dof)},
+                actuator_range=(self.low, self.high), output_max=(OSC_POS_LIMIT,) * 3 + (0.5,) * 3,
+                output_min=(-OSC_POS_LIMIT,) * 3 + (-0.5,) * 3, kp=drives.OSC_KP, damping_ratio=drives.OSC_DAMPING_RATIO,
+                input_ref_frame="world", uncouple_pos_ori=True, lite_physics=True, part_name="right", naming_prefix="robot0_",
+            )  # fmt: skip
+
+        def reset(self, home: np.ndarray) -> None:
+            super().reset(home)
+            self.osc.update_initial_joints(np.asarray(home, float))
+
+        def _update(self) -> None:
+            super()._update()
+            self.osc.new_update = True
+
+        def _set_goal(self, action: np.ndarray) -> None:
+            self.osc.set_goal(action)
+
+        def _torques(self) -> np.ndarray:
+            return self.osc.run_controller()
+
+    record = scenes.read(libero_dataset).iloc[0]
+    spec = EpisodeSpec.from_json(record["spec"])
+    actions = np.stack(LeRobotReader(libero_dataset).data.query("episode_index == 0")[ACTION_KEY].to_numpy())
+    paths = []
+    for drive in (None, Robosuites):
+        scene = scene_for(spec.assets, spec.sim.profile)
+        if drive is not None:
+            scene = type(scene)(spec.assets, spec.sim.profile)
+            scene.drive = drive(scene.model, scene.data)
+        scene.reset(spec)
+        path = []
+        for action in actions:
+            scene.step(action)
+            path.append(scene.data.qpos[scene.arm_qpos].copy())
+        paths.append(np.array(path))
+    assert np.abs(paths[0] - paths[1]).max() < 1e-9
+
+
 def test_frames_are_mirrored_as_in_lerobots_libero_datasets() -> None:
     """lerobot's LIBERO datasets hold robosuite's (upside-down, OpenGL) frames turned 180
     degrees: upright, mirrored left to right. An object on the robot's left (+y), which an

@@ -10,60 +10,36 @@ import sys
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 import pandas as pd
 
 from helpers import make_dataset
 
+ROOT = Path(__file__).resolve().parent.parent
 ANSWER = {"target", "program", "face", "variant", "spec", "alternatives", "original_target", "counterfactuals"}
 
 
-def reach_the_named_object(instruction: str, scene: dict, geometry: dict, state: np.ndarray) -> np.ndarray:
-    """A scripted libero-profile policy: bring the hand 3 cm above the grasp point (exam.json's
-    geometry: top centre minus grasp depth) of whatever object the instruction names, with
-    end-effector deltas and the gripper open; hold still when it names nothing."""
-    named = [o for o in scene["objects"] if o["name"] in instruction]
-    if not named:
-        return np.array([0, 0, 0, 0, 0, 0, -1], np.float32)
-    obj = max(named, key=lambda o: len(o["name"]))
-    shape = geometry[obj["kind"]]
-    grasp = np.asarray(obj["pos"]) + [0.0, 0.0, shape["size"][2] - shape["bottom"] - shape["grasp_depth"]]
-    goal = grasp + [0.0, 0.0, 0.03]
-    delta = np.clip(3.0 * (goal - state[:3]) / 0.05, -1.0, 1.0)
-    return np.array([*delta, 0, 0, 0, -1], np.float32)
+def readme_loop() -> str:
+    """The python block of the README's "Taking the exam in your own code", exactly as printed."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("### Taking the exam in your own code") :]
+    return section[section.index("```python\n") + len("```python\n") : section.index("\n```\n")]
 
 
-def test_a_lab_policy_on_the_documented_env_takes_the_exam(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "exam", "n=10", "split=exam", "seed=4", "profile=libero", "image_size=32")
-    trials = pd.read_parquet(root / "trials.parquet")  # the policy's side of the exam
-    geometry = json.loads((root / "exam.json").read_text())["geometry"]
+def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path: Path) -> None:
+    """A lab pastes the README's loop into a folder of its own and runs it: it makes its exam,
+    takes every row through the documented env, logs and scores them; nothing the policy side
+    receives holds the answer, and its policy obeys the name."""
+    ran = subprocess.run([sys.executable, "-c", readme_loop()], capture_output=True, text=True, cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr[-3000:]
+    exam = tmp_path / "datasets" / "object-exam-libero"
+    trials = pd.read_parquet(exam / "trials.parquet")
     assert not ANSWER & set(trials.columns)
-    logs = []
-    for row in trials.itertuples():
-        scene = json.loads(row.scene)
-        assert scene["target"] == "" and scene["counterfactuals"] == [] and scene["instruction"] == ""
-        env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=str(root), row=row.row)
-        obs, info = env.reset()
-        assert not ANSWER & set(info) and info["instruction"] == row.instruction
-        ee, objects = [info["ee"].tolist()], {k: [list(v)] for k, v in info["objects"].items()}
-        for _ in range(min(row.max_steps, 60)):
-            action = reach_the_named_object(row.instruction, scene, geometry, obs["observation.state"])
-            obs, _, _, truncated, info = env.step(action)
-            assert not ANSWER & set(info)
-            ee.append(info["ee"].tolist())
-            for k, v in info["objects"].items():
-                objects[k].append(list(v))
-            if truncated:
-                break
-        env.close()
-        logs.append({"row": row.row, "ee": ee, "objects": json.dumps(objects), "error": None})
-    pd.DataFrame(logs).to_parquet(tmp_path / "rollouts.parquet")
-    scored = subprocess.run(
-        [sys.executable, "-m", "eval.score", f"exam={root}", f"logs={tmp_path / 'rollouts.parquet'}", f"out={tmp_path}"],
-        capture_output=True,
-        text=True,
-    )
-    assert scored.returncode == 0, scored.stderr
+    scene = json.loads(trials["scene"].iloc[0])
+    assert scene["target"] == "" and scene["counterfactuals"] == [] and scene["instruction"] == ""
+    env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=str(exam), row=0)
+    _, info = env.reset()
+    assert not ANSWER & set(info) and info["instruction"] == trials["instruction"].iloc[0]
+    env.close()
     faces = json.loads((tmp_path / "report.json").read_text())["faces"]
     assert faces["obeyed_name"]["rate"] >= 0.8 and faces["true_target"]["rate"] <= 0.1  # it reads the instruction
     assert faces["nonsense"]["k"] == 0 and faces["task"]["k"] == 0  # it never lifts anything

@@ -149,3 +149,22 @@ def test_the_scorer_refuses_duplicated_rows_and_a_wrong_step_zero(exam: Exam, tm
     )
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2 and len(lines) == 1 and "more than once" in lines[0], result.stderr
+
+
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        (lambda logs: [*logs, {**logs[0], "row": 999}], "the logs hold row 999, which the exam does not have (its rows are 0.."),
+        (lambda logs: [{**log, "row": str(log["row"])} for log in logs], "column 'row' must hold integers"),
+        (lambda logs: [{**log, "ee": "left"} for log in logs], "column 'ee' must hold each rollout's end-effector positions"),
+        (lambda logs: [{**log, "objects": 7} for log in logs], "column 'objects' must hold a JSON string"),
+    ],
+)
+def test_the_scorer_names_a_stray_row_or_a_column_of_the_wrong_type(exam: Exam, tmp_path: Path, change, needle: str) -> None:  # noqa: ANN001
+    path = tmp_path / "rollouts.parquet"
+    pd.DataFrame(change([_log(row, "far") for _, row in exam.trials.iterrows()])).to_parquet(path)
+    result = subprocess.run(
+        [sys.executable, "-m", "eval.score", f"exam={exam.root}", f"logs={path}"], capture_output=True, text=True
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and needle in lines[0], result.stderr

@@ -130,7 +130,39 @@ def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_datase
         assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1 and needle in result.stderr, result.stderr
     wrong_size = _train(f"dataset={object_dataset}", "image_size=96", f"out={tmp_path / 'ckpt'}")
     assert wrong_size.returncode == 2 and "frames are 64 px but image_size=96" in wrong_size.stderr
+    assert "regenerate the dataset with image_size=96" in wrong_size.stderr
+    unmakeable = _train(f"dataset={object_dataset}", "image_size=7", f"out={tmp_path / 'ckpt'}")
+    lines = unmakeable.stderr.strip().splitlines()
+    assert unmakeable.returncode == 2 and len(lines) == 1 and "train with image_size=64" in lines[0]
+    assert "image_size=7" in lines[0] and "regenerate" not in lines[0] and "not a size python -m gen makes" in lines[0]
     assert not (tmp_path / "ckpt").exists()
+
+
+def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: Path) -> None:
+    """`dataset=[a,b]`: the union's frames, episodes and instructions, statistics over all frames,
+    batches drawn from each dataset equally; datasets that disagree are refused in one line."""
+    from train import data
+
+    color = make_dataset(tmp_path / "color", "referent=color", "n=2", "image_size=64", "seed=3")
+    one, other = data.load(str(object_dataset)), data.load(str(color))
+    union = data.load([str(object_dataset), str(color)])
+    assert len(union) == len(one) + len(other) and union.sources == [str(object_dataset), str(color)]
+    assert len(union.starts) == len(one.starts) + len(other.starts) and union.ends[-1] == len(union)
+    assert set(union.tasks) == set(one.tasks) | set(other.tasks)
+    assert [union.tasks[t] for t in union.task[len(one) :]] == [other.tasks[t] for t in other.task]
+    both = np.concatenate([one.state, other.state])
+    np.testing.assert_allclose(union.stats["observation.state"]["mean"], both.mean(0), rtol=1e-6)
+    np.testing.assert_allclose(union.stats["observation.state"]["std"], both.std(0), rtol=1e-5, atol=1e-7)
+    drawn = union.source[data.sample(union, np.random.default_rng(0), 4000, balance=True)]
+    assert abs(np.mean(drawn == 1) - 0.5) < 0.05  # equal shares although the datasets differ in size
+    fit(TrainConfig(dataset=[str(object_dataset), str(color)], out=str(tmp_path / "ckpt"), steps=2, batch_size=4), progress=False)
+    assert (tmp_path / "ckpt" / "model.pt").is_file()
+    small = make_dataset(tmp_path / "small", "referent=color", "n=2", "image_size=32", "seed=3")
+    refused = _train(f"dataset=[{object_dataset},{small}]", f"out={tmp_path / 'no'}")
+    lines = refused.stderr.strip().splitlines()
+    assert refused.returncode == 2 and len(lines) == 1 and "frame size [32, 32, 3]" in lines[0], refused.stderr
+    twice = _train(f"dataset=[{object_dataset},{object_dataset}]", f"out={tmp_path / 'no'}")
+    assert twice.returncode == 2 and "lists a folder twice" in twice.stderr and not (tmp_path / "no").exists()
 
 
 def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:

@@ -20,6 +20,7 @@ import numpy as np
 
 from core import cache_dir, parquet
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.worlds import MAX_IMAGE_SIZE
 from gen.lerobot_reader import INFO_PATH, TASKS_PATH, LeRobotReader
 from gen.lerobot_writer import EPISODES_PATH
 from gen.partial import GENERATION_PATH
@@ -89,10 +90,13 @@ def check(root: Path, image_size: int | None = None) -> dict:
     if height != width:
         raise DatasetError(f"{root}: frames are {height}x{width}; the tiny policy takes square frames")
     if image_size is not None and image_size != height:
-        raise DatasetError(
-            f"{root}: frames are {height} px but image_size={image_size}; "
-            f"train with image_size={height} or regenerate the dataset with image_size={image_size}"
+        makeable = 16 <= image_size <= MAX_IMAGE_SIZE and image_size % 2 == 0
+        advice = (
+            f"or regenerate the dataset with image_size={image_size}"
+            if makeable
+            else f"({image_size} px is not a size python -m gen makes: an even number in [16, {MAX_IMAGE_SIZE}])"
         )
+        raise DatasetError(f"{root}: frames are {height} px but image_size={image_size}; train with image_size={height} {advice}")
     tasks = parquet.read(root / TASKS_PATH)
     if len(tasks) < 2:
         raise DatasetError(

@@ -76,6 +76,7 @@ class World:
     integrator: str = "implicitfast"
     arena: Mapping[str, str] = field(default_factory=dict)  # builder-specific: scene file, floor and wall styles
     suite: str = ""  # the LIBERO benchmark suite whose BDDL problems lay the world's scenes out
+    robot_faces: int = 2000  # the robot's visual meshes are decimated to this many triangles each (oracle/meshes.py)
     episode_steps: int = 0  # the steps an evaluation of the suite allows (lerobot's LIBERO env), after its settle steps
     body_name: Callable[[str, int], str] = _numbered  # the model's name for the i-th (from 0) body of a kind
     requires: Callable[[], None] = _ready  # raises WorldUnavailable when the world's assets are missing
