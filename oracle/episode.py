@@ -36,9 +36,7 @@ def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outco
     return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])))
 
 
-def demonstrate(
-    scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan, state: np.ndarray | None = None, settle: int = 0
-) -> Demo:
+def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan, state: np.ndarray | None = None, settle: int = 0) -> Demo:
     """Run `plan` from the spec's poses, or from the physics `state` (an exam trial's start),
     after `settle` steps that hold the arm still (a profile's settle steps)."""
     scene.reset(spec)

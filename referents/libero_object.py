@@ -75,4 +75,3 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     x, y = cfg.layout.slots[slot]
     chosen = min((o for o in spec.objects if o.id != destination), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
     return replace(spec, target=chosen.id)
-
