@@ -71,7 +71,7 @@ def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type)
         raise UserError(f"LIBERO's environment failed: {done.stderr.strip().splitlines()[-1]}")
     recorded = np.load(frames)
     stepping = float(recorded["seconds_per_step"]) * sum(lengths)
-    cameras = {"image": recorded["agentview"], "image2": recorded["robot0_eye_in_hand"]}
+    cameras = {feature: recorded[camera] for feature, camera in LIBERO.cameras.items()}
     features = {
         **{
             LIBERO.image_key(c): {"dtype": "video", "shape": (size, size, 3), "names": ["height", "width", "channels"]}

@@ -22,9 +22,9 @@ from typing import Any, List
 import gen.produce as produce
 from core import worlds
 from gen.cli import main
-from gen.config import GenConfig, validate
+from gen.config import GenConfig, load_referent, validate
 from gen.lerobot_writer import Layout, LeRobotWriter
-from gen.plan import designs, load_referent, sim_settings
+from gen.plan import designs, sim_settings
 from oracle.render import Cameras
 
 CLOCKS: dict[str, float] = {"render": 0.0, "encode": 0.0}

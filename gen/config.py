@@ -23,6 +23,8 @@ from gen.cli import UserError, compose_config
 from gen.partial import GENERATION_PATH, completed
 from gen.scenes import SCENES_PATH
 from gen.video import CODECS
+from referents import Referent, UnknownReferent
+from referents.schema import ReferentSpecError
 
 DATASET_ENTRIES = {"meta", "data", "videos", "README.md", "preview.png", "images"}  # a dataset folder's own names
 
@@ -110,13 +112,14 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"max_attempts must be at least 1, got {cfg.max_attempts}")
     if cfg.objects_per_scene is not None and cfg.objects_per_scene < 2:
         raise UserError(f"objects_per_scene must be at least 2 (a swap needs another object), got {cfg.objects_per_scene}")
+    load_referent(cfg)  # the spec's own problems come before any about out=
     if cfg.out is None:
         cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
-    check_size(cfg, profile)
     try:
         check_output(Path(cfg.out), cfg.overwrite or cfg.resume and completed(Path(cfg.out)) is not None)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
+    check_size(cfg, profile)
 
 
 # What a run needs, measured: planning holds ~11.7 KB of memory per episode (a 20,000-episode
@@ -164,6 +167,14 @@ def _size(n: float) -> str:
             return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
         n /= 1000
     return f"{n:.1f} EB"
+
+
+def load_referent(cfg: GenConfig) -> Referent:
+    """The run's referent, its spec validated with the run's overrides."""
+    try:
+        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides())
+    except (UnknownReferent, ReferentSpecError) as exc:
+        raise UserError(str(exc)) from None
 
 
 def resolve_world(cfg: GenConfig) -> worlds.World:

@@ -14,14 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import referents
 from core import worlds
 from core.layout import layout
 from core.spec import EpisodeSpec, SceneObject, SimSettings
 from gen.audit import audit
 from gen.cli import UserError
-from gen.config import GenConfig
-from referents import Referent, UnknownReferent
+from gen.config import GenConfig, load_referent
+from referents import Referent
 from referents.balance import Balance
 from referents.design import Design
 from referents.schema import ReferentSpecError
@@ -94,13 +93,6 @@ class Planned:
     designs: list[Design]
     specs: list[EpisodeSpec]
     audit: dict
-
-
-def load_referent(cfg: GenConfig) -> Referent:
-    try:
-        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides())
-    except (UnknownReferent, ReferentSpecError) as exc:
-        raise UserError(str(exc)) from None
 
 
 def world_sim(world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20) -> SimSettings:
