@@ -129,9 +129,9 @@ def replay(request: dict, out: str) -> None:
             with open(bddl, "w") as f:
                 f.write(_bddl(objects, target, container))
             env = _env(bddl, 32, cameras=False)
-            model = env.sim.model
             for i in indices:
-                episode = episodes[i]
+                env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
+                model, episode = env.sim.model, episodes[i]
                 qpos = np.array(env.sim.data.qpos)
                 for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
                     qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
