@@ -8,18 +8,23 @@ rows' physics, initial states and horizons are the same).
 
 Only the plan is the same on every machine: the episode specs and their scene records come from
 seeded arithmetic alone. What the physics writes (actions, states, the oracle's retries, exam
-horizons) is not: the same command at the same commit gave other data bytes on an AMD host
-without AVX-512 than on the Intel and AMD hosts with it (MuJoCo's and numpy's floating point
-follows the vector instructions they run on), while two runs on one host agree. So the plans
-are pinned everywhere, the physics per CPU family where the family's hashes were recorded, and
-on a family with none only same-seed determinism is checked (tests/test_dataset.py, and twice
-here). Rendered pixels depend on the family too (Mesa's llvmpipe compiles its rasteriser for the
-host's vector instructions): the videos and the per-episode image statistics in meta/episodes
-are pinned per family the same way.
+horizons) is not: it follows the numeric kernels the host runs. numpy's BLAS (OpenBLAS picks its
+kernel per processor, and OPENBLAS_CORETYPE overrides the pick) and numpy's own vector loops
+decide the operational-space controller's and the IK's rounding: the same command at the same
+commit wrote other data bytes with OpenBLAS's Haswell kernel (an AMD host without AVX-512; an
+AMD EPYC with AVX-512 whose environment sets OPENBLAS_CORETYPE=Haswell) than with its Cooperlake
+kernel (the same EPYC without that variable, and the hosts the hashes were first recorded on),
+while two runs on one host agree. So the plans are pinned everywhere, the physics per numeric
+family (`numeric_family()`: BLAS kernel and numpy's widest vector extension) where the family's
+hashes were recorded, and on a family with none only same-seed determinism is checked
+(tests/test_dataset.py, and twice here). Rendered pixels depend on the processor too (Mesa's
+llvmpipe compiles its rasteriser for the host's vector instructions) besides the physics behind
+them: the videos and the per-episode image statistics in meta/episodes are pinned per processor
+and numeric family the same way.
 
 The videos changed once, on purpose: H.264 moved from crf to a constant quantiser (gen/video.py),
 because x264's floating-point rate control gave different bytes for the same frames in one CI
-run. Only this AMD family's videos could be re-recorded (no Intel host was at hand); the Intel
+run. Only the AMD family's videos could be re-recorded (no Intel host was at hand); the Intel
 family keeps its per-episode records, and its videos are checked again once recorded there.
 """
 
@@ -41,11 +46,8 @@ PLANS = {  # sha256 (first 40 hex digits) of the plan's meta/scenes.parquet (pla
     "object": "7b392f9ff0356dd44e1b979da1d3f06b707d20b7",
     "goal": "f61b06f7b504df0a33d32f8bdde4ed81aec4da65",
 }
-SHA256 = {  # first 40 hex digits of each file's sha256, on the CPU families of PHYSICS_FAMILIES
-    "object": {
-        "data/chunk-000/file-000.parquet": "981d10232e2cf95345e6c7add7c299e43e27f5ae",
-        "meta/scenes.parquet": "27cd44eb4f00eaccb64beb2e648701554123d1de",
-    },
+COOPERLAKE, HASWELL = "openblas Cooperlake, numpy AVX512_SKX", "openblas Haswell, numpy AVX512_SKX"
+SAME_ON_BOTH = {  # cases whose physics these two families write alike
     "goal": {
         "data/chunk-000/file-000.parquet": "59680dd35e33fb3d75d3d6668f78ae5f6aec5a56",
         "meta/scenes.parquet": "ebf9d08f2aeb6712f49ee9bf1aac2e428d040df5",
@@ -55,14 +57,32 @@ SHA256 = {  # first 40 hex digits of each file's sha256, on the CPU families of 
         "answers.parquet": "0c66b7ffe12b7fcdfc9249e8e49469f0243735f5",
     },
 }
-PHYSICS_FAMILIES = ("GenuineIntel avx512f amx_tile", "AuthenticAMD avx512f")  # where SHA256 was recorded (alike)
+PHYSICS = {  # numeric family -> case -> first 40 hex digits of each file's sha256
+    COOPERLAKE: {  # AMD EPYC with AVX-512 (and, alike, the Intel host with AMX the hashes were first recorded on)
+        "object": {
+            "data/chunk-000/file-000.parquet": "981d10232e2cf95345e6c7add7c299e43e27f5ae",
+            "meta/scenes.parquet": "27cd44eb4f00eaccb64beb2e648701554123d1de",
+        },
+        **SAME_ON_BOTH,
+    },
+    HASWELL: {  # AMD EPYC (family 26) with AVX-512, OPENBLAS_CORETYPE=Haswell
+        "object": {
+            "data/chunk-000/file-000.parquet": "3637a47b6c603906a2a5ed68883001831a9e412c",
+            "meta/scenes.parquet": "aa28f89da412457a79e22c2fdcec07ff84e3856f",
+        },
+        **SAME_ON_BOTH,
+    },
+}
 EPISODES, AGENTVIEW_MP4, WRIST_MP4 = (
     "meta/episodes/chunk-000/file-000.parquet",
     "videos/observation.images.agentview/chunk-000/file-000.mp4",
     "videos/observation.images.wrist/chunk-000/file-000.mp4",
 )
-RENDERED = {  # CPU family -> case -> rendered files' hashes
-    "GenuineIntel avx512f amx_tile": {  # recorded at commit 2f5bc96; its videos were not re-recorded (see above)
+AMD_EPYC_AVX512 = "AuthenticAMD avx512f"
+RENDERED = {  # (processor family, numeric family) -> case -> rendered files' hashes
+    # Intel with AMX: recorded at commit 2f5bc96, its BLAS kernel not noted then (OpenBLAS names it
+    # SapphireRapids there); its videos were not re-recorded (see above)
+    ("GenuineIntel avx512f amx_tile", "openblas SapphireRapids, numpy AVX512_SKX"): {
         "object": {
             EPISODES: "a1a71da3bb8ac17bf49f94b094ff2af0df7fb6c2",
         },
@@ -70,9 +90,21 @@ RENDERED = {  # CPU family -> case -> rendered files' hashes
             EPISODES: "9efca67f9dbecbc0629828313198fc38d43cfe49",
         },
     },
-    "AuthenticAMD avx512f": {  # on an AMD EPYC with AVX-512; videos re-recorded for the constant quantiser
+    (AMD_EPYC_AVX512, COOPERLAKE): {  # videos re-recorded for the constant quantiser
         "object": {
             EPISODES: "a938e7ef68e594ce66e0396c3341cdcfcdad1475",
+            AGENTVIEW_MP4: "bffd9dc3259c671eb200f6c99dfc20ab0821af47",
+            WRIST_MP4: "90365546db22b46fc00333ab3854b698243b7bc5",
+        },
+        "goal": {
+            EPISODES: "ff9e08358e660c1a10f5629f09db58f14ee9fc6f",
+            AGENTVIEW_MP4: "b33f2fddfc8515a56ef376dd5361e691238b1dda",
+            WRIST_MP4: "81de54e289e3a12b2bd558818e499ab54bac5687",
+        },
+    },
+    (AMD_EPYC_AVX512, HASWELL): {
+        "object": {
+            EPISODES: "7557e3fa0afe8763843e0173779a40c0e199d317",
             AGENTVIEW_MP4: "bffd9dc3259c671eb200f6c99dfc20ab0821af47",
             WRIST_MP4: "90365546db22b46fc00333ab3854b698243b7bc5",
         },
@@ -96,6 +128,18 @@ def cpu_family() -> str:
     return " ".join([vendor, *(f for f in ("avx512f", "amx_tile") if f in flags)])
 
 
+def numeric_family() -> str:
+    """The kernels physics' rounding follows: the BLAS numpy calls, and numpy's widest vector loops."""
+    import numpy as np
+    from threadpoolctl import threadpool_info
+
+    numpy_blas = [i for i in threadpool_info() if i["user_api"] == "blas" and "numpy" in i["filepath"]]  # not torch's, scipy's
+    blas = f"{numpy_blas[0]['internal_api']} {numpy_blas[0].get('architecture')}" if numpy_blas else "unknown blas"
+    features = np.core._multiarray_umath.__cpu_features__
+    simd = next((f for f in ("AVX512_SKX", "AVX512F", "AVX2", "SSE42") if features.get(f)), "baseline")
+    return f"{blas}, numpy {simd}"
+
+
 def _hashes(root: Path, files: dict[str, str]) -> dict[str, str]:
     return {rel: hashlib.sha256((root / rel).read_bytes()).hexdigest()[:40] for rel in files}
 
@@ -112,10 +156,10 @@ def outputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 @pytest.mark.parametrize("case", CASES)
 def test_output_bytes_are_unchanged(case: str, outputs: dict[str, Path]) -> None:
-    family = cpu_family()
-    if family not in PHYSICS_FAMILIES:
-        pytest.skip(f"no physics hashes recorded for CPU family {family!r}; its plans and determinism are checked")
-    assert _hashes(outputs[case], SHA256[case]) == SHA256[case]
+    family = numeric_family()
+    if family not in PHYSICS:
+        pytest.skip(f"no physics hashes recorded for numeric family {family!r}; its plans and determinism are checked")
+    assert _hashes(outputs[case], PHYSICS[family][case]) == PHYSICS[family][case]
 
 
 @pytest.mark.parametrize("case", PLANS)
@@ -135,13 +179,13 @@ def test_physics_is_deterministic_on_this_machine(outputs: dict[str, Path], tmp_
         [sys.executable, "-m", "gen", *CASES["object"], f"out={tmp_path / 'again'}"], capture_output=True, text=True
     )
     assert made.returncode == 0, made.stderr
-    files = {rel: "" for rel in SHA256["object"]}
+    files = {rel: "" for rel in PHYSICS[COOPERLAKE]["object"]}
     assert _hashes(tmp_path / "again", files) == _hashes(outputs["object"], files)
 
 
 @pytest.mark.parametrize("case", ["object", "goal"])
 def test_rendered_bytes_are_unchanged(case: str, outputs: dict[str, Path]) -> None:
-    family = cpu_family()
+    family = (cpu_family(), numeric_family())
     if family not in RENDERED:
-        pytest.skip(f"no rendered hashes recorded for CPU family {family!r} (llvmpipe's pixels depend on it)")
+        pytest.skip(f"no rendered hashes recorded for the families {family} (llvmpipe's pixels and the physics depend on them)")
     assert _hashes(outputs[case], RENDERED[family][case]) == RENDERED[family][case]
