@@ -23,6 +23,9 @@ class Cameras:
             raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(known)}")
         self.scene = scene
         self.cameras = cameras
+        # The offscreen buffer is as large as the frames (the model allows up to MAX_IMAGE_SIZE):
+        # every frame clears the whole buffer, and a context allocates it at start.
+        scene.model.vis.global_.offwidth = scene.model.vis.global_.offheight = size
         self.renderer = mujoco.Renderer(scene.model, size, size)
         flags = self.renderer.scene.flags
         for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):

@@ -26,7 +26,7 @@ from core import catalog, worlds
 from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
 from core.spec import EpisodeSpec, SceneObject, yaw_quat
 from core.worlds import native
-from oracle import meshes
+from oracle import meshes, textures
 from oracle.drives import SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
 
 # robosuite logs warnings about optional extras at import; they say nothing about our use.
@@ -160,14 +160,23 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     _configure(root, world)
     faces = {str(libero_folder(k)): k.params["faces"] for k in world.kinds.values() if "faces" in k.params}
     meshes.lighten(root, objects=world.builder != "table", faces=faces, robot_faces=world.robot_faces)
+    if world.builder != "table":  # robosuite's own textures are small; the native scene's bytes stay as they are
+        textures.shrink(root)
     return ET.tostring(root, encoding="unicode")
 
 
-def robot_xml(world_name: str = "native") -> str:
-    """The world's robot alone, at the same base pose: the IK model."""
+def robot_xml(world_name: str = "native", light: bool = True) -> str:
+    """The world's robot alone, at the same base pose: the IK model. Its visual meshes are the
+    lightened ones (`light`) too: the links' inertias are given, so kinematics are the same, and
+    the model compiles in a tenth of the time."""
+    world = worlds.world(world_name)
     arena_free = MujocoWorldBase()
-    arena_free.merge(_robot(worlds.world(world_name)))
-    return arena_free.get_xml()
+    arena_free.merge(_robot(world))
+    if not light:
+        return arena_free.get_xml()
+    root = ET.fromstring(arena_free.get_xml())
+    meshes.lighten(root, robot_faces=world.robot_faces)
+    return ET.tostring(root, encoding="unicode")
 
 
 @dataclass

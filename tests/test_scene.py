@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
@@ -94,7 +96,7 @@ def test_robot_visual_meshes_are_light_and_collision_meshes_untouched(scene: Sce
     from oracle.meshes import MAX_FACES
     from oracle.scene import robot_xml
 
-    full = mujoco.MjModel.from_xml_string(robot_xml())  # the robot as robosuite ships it
+    full = mujoco.MjModel.from_xml_string(robot_xml(light=False))  # the robot as robosuite ships it
     m = scene.model
     light, kept = 0, 0
     for g in range(m.ngeom):
@@ -111,3 +113,38 @@ def test_robot_visual_meshes_are_light_and_collision_meshes_untouched(scene: Sce
             assert faces == original, f"collision mesh {mesh} changed"
             kept += 1
     assert light >= 5 and kept >= 5
+
+
+def test_the_ik_model_keeps_the_robots_kinematics() -> None:
+    """The IK model's visual meshes are lightened; its bodies, joints and sites are robosuite's."""
+    from oracle.scene import robot_xml
+
+    light, full = (mujoco.MjModel.from_xml_string(robot_xml(light=flag)) for flag in (True, False))
+    assert sum(light.mesh_facenum) < sum(full.mesh_facenum) / 2
+    for field in (
+        "body_pos",
+        "body_quat",
+        "body_mass",
+        "body_inertia",
+        "body_ipos",
+        "body_iquat",
+        "jnt_axis",
+        "jnt_range",
+        "site_pos",
+    ):
+        assert np.array_equal(getattr(light, field), getattr(full, field)), field
+
+
+def test_large_textures_are_halved_by_two_by_two_averages(tmp_path: Path) -> None:
+    from PIL import Image
+
+    from oracle.textures import halved
+
+    rng = np.random.default_rng(0)
+    pixels = rng.integers(0, 256, (8, 16, 3), dtype=np.uint8)
+    Image.fromarray(pixels).save(tmp_path / "big.png")
+    small = np.asarray(Image.open(halved(str(tmp_path / "big.png"), side=4)))
+    expected = pixels.reshape(2, 4, 4, 4, 3).mean(axis=(1, 3))  # two halvings: 4 x 4 blocks
+    assert small.shape == (2, 4, 3)
+    assert np.abs(small - expected).max() <= 1.0  # each halving rounds once
+    assert halved(str(tmp_path / "big.png"), side=16) == tmp_path / "big.png"  # small enough: the file itself
