@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -248,3 +249,26 @@ def test_help_says_where_an_exam_goes_by_default() -> None:
     assert "default datasets/<referent> (split=exam: datasets/<referent>-exam)" in shown.stdout
     readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
     assert "`datasets/<referent>` (`datasets/<referent>-exam` with `split=exam`)" in readme
+
+
+def test_the_multi_axis_parts_make_only_the_sets_they_use() -> None:
+    from train.axes import AxesOptions, _stages
+
+    assert list(_stages(AxesOptions(parts=["tiers"]))) == ["data tiers", "exam tiers"]
+    loo = _stages(AxesOptions(parts=["loo"], axes=["object", "color", "ordinal"], left_out="ordinal"))
+    assert list(loo) == ["data object", "data color", "exam ordinal"]
+    every = _stages(AxesOptions(parts=["axes"], axes=["object", "color"]))
+    assert list(every) == ["data object", "exam object", "data color", "exam color"]
+
+
+def test_parts_finished_in_an_earlier_sitting_stay_in_the_results(tmp_path: Path) -> None:
+    from train.axes import carried_over
+
+    earlier = {"axes": {"rows": []}, "commands": ["python -m gen a"], "timings_s": {"train axes": 1.0}, "not_run": []}
+    (tmp_path / "results_axes.json").write_text(json.dumps(earlier))
+    now = {"tiers": {"tiers": {}}, "commands": ["python -m gen b"], "timings_s": {"train tiers": 2.0}, "not_run": ["loo"]}
+    merged = carried_over(now, tmp_path / "results_axes.json")
+    assert merged["axes"] == {"rows": []} and merged["tiers"] == {"tiers": {}} and merged["carried"] == ["axes"]
+    assert merged["commands"] == ["python -m gen a", "python -m gen b"] and merged["not_run"] == ["loo"]
+    assert merged["timings_s"] == {"train axes": 1.0, "train tiers": 2.0}
+    assert carried_over(now, tmp_path / "absent.json") is now

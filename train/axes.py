@@ -17,6 +17,10 @@ finds in `out`, so a killed run continues where it stopped:
   targets are a trained object and those two, so each tier's obeyed-name is read off the swaps
   that name it.
 
+Each part generates only the sets it uses. Results go to docs= together with those of parts an
+earlier sitting wrote there (carried over from its results_axes.json, and said so), so the parts
+can be run one at a time.
+
 The recipe scales with the number of types trained: `steps_per_axis` steps each, the last
 `cool` fraction cooling the learning rate to `lr_floor`. Results go to
 docs/RESULTS_AXES.md, docs/results_axes.json and docs/axes.png; the trained checkpoints, when
@@ -100,11 +104,25 @@ def _gen(options: AxesOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
 def _stages(options: AxesOptions) -> dict[str, tuple[str, GenConfig]]:
     """Stage name -> (command, config) of every dataset and exam the chosen parts need."""
     root, stages = Path(options.out), {}
+    data = set(options.axes) if "axes" in options.parts else set()
+    exams = set(data)
+    if "loo" in options.parts:
+        data |= {axis for axis in options.axes if axis != options.left_out}
+        exams.add(options.left_out)
     for axis in options.axes:
-        stages[f"data {axis}"] = _gen(options, root / "data" / axis, f"referent={axis}", f"n={options.n}", f"seed={options.seed}")
-        stages[f"exam {axis}"] = _gen(
-            options, root / "exams" / axis, f"referent={axis}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}"
-        )
+        if axis in data:
+            stages[f"data {axis}"] = _gen(
+                options, root / "data" / axis, f"referent={axis}", f"n={options.n}", f"seed={options.seed}"
+            )
+        if axis in exams:
+            stages[f"exam {axis}"] = _gen(
+                options,
+                root / "exams" / axis,
+                f"referent={axis}",
+                f"n={options.trials}",
+                "split=exam",
+                f"seed={options.seed + 1}",
+            )
     if "tiers" in options.parts:
         quoted = (f'"{options.absent}"', f'"{options.distractor_only}"', f'"{options.trained}"')
         stages["data tiers"] = _gen(
@@ -298,6 +316,8 @@ def write_docs(results: dict, docs: Path) -> None:
         ]
         for tier, t in tiers["tiers"].items():
             lines.append(f"| {tier.replace('_', ' ')} | {t['object']} | {cell(t)} | {t['chance']:.0%} |")
+    if results.get("carried"):
+        lines += ["", f"Carried over from the results an earlier sitting wrote here: {', '.join(results['carried'])}."]
     if results["not_run"]:
         lines += ["", f"Not run (no finished training in `{s['out']}`): {', '.join(results['not_run'])}."]
     lines += ["", "Commands, in order:", "", "```", *dict.fromkeys(results["commands"]), "```", ""]
@@ -359,8 +379,28 @@ def plot(results: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def carried_over(results: dict, previous_file: Path) -> dict:
+    """`results` with the parts it lacks taken from the results already written in docs=: a part
+    finished in an earlier sitting, whose out= may be gone since, stays reported (and says so)."""
+    try:
+        previous = json.loads(previous_file.read_text())
+    except (OSError, ValueError):
+        return results
+    carried = [part for part in PARTS if part not in results and part in previous]
+    if not carried:
+        return results
+    return {
+        **results,
+        **{part: previous[part] for part in carried},
+        "carried": carried,
+        "not_run": [part for part in results["not_run"] if part not in carried],
+        "commands": [*previous.get("commands", []), *results["commands"]],
+        "timings_s": {**previous.get("timings_s", {}), **results["timings_s"]},
+    }
+
+
 def axes(options: AxesOptions) -> None:
-    results = run(options)
+    results = carried_over(run(options), Path(options.docs) / "results_axes.json")
     write_docs(results, Path(options.docs))
     print((Path(options.docs) / "RESULTS_AXES.md").read_text())
 
