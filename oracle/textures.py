@@ -21,7 +21,7 @@ from pathlib import Path
 
 from core import cache_dir
 
-TEXTURE_SIDE = 1024  # texels: the largest side a 2-D texture map keeps
+TEXTURE_SIDE = 1024  # texels: the largest side a texture image keeps
 
 
 def shrink(root: ET.Element, side: int = TEXTURE_SIDE) -> None:
