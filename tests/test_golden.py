@@ -47,6 +47,7 @@ PLANS = {  # sha256 (first 40 hex digits) of the plan's meta/scenes.parquet (pla
     "goal": "f61b06f7b504df0a33d32f8bdde4ed81aec4da65",
 }
 COOPERLAKE, HASWELL = "openblas Cooperlake, numpy AVX512_SKX", "openblas Haswell, numpy AVX512_SKX"
+SAPPHIRE_RAPIDS = "openblas SapphireRapids, numpy AVX512_SKX"  # OpenBLAS's kernel on the Intel host with AMX
 SAME_ON_BOTH = {  # cases whose physics these two families write alike
     "goal": {
         "data/chunk-000/file-000.parquet": "59680dd35e33fb3d75d3d6668f78ae5f6aec5a56",
@@ -58,7 +59,7 @@ SAME_ON_BOTH = {  # cases whose physics these two families write alike
     },
 }
 PHYSICS = {  # numeric family -> case -> first 40 hex digits of each file's sha256
-    COOPERLAKE: {  # AMD EPYC with AVX-512 (and, alike, the Intel host with AMX the hashes were first recorded on)
+    COOPERLAKE: {  # AMD EPYC with AVX-512, without OPENBLAS_CORETYPE
         "object": {
             "data/chunk-000/file-000.parquet": "981d10232e2cf95345e6c7add7c299e43e27f5ae",
             "meta/scenes.parquet": "27cd44eb4f00eaccb64beb2e648701554123d1de",
@@ -73,16 +74,28 @@ PHYSICS = {  # numeric family -> case -> first 40 hex digits of each file's sha2
         **SAME_ON_BOTH,
     },
 }
+PHYSICS[SAPPHIRE_RAPIDS] = PHYSICS[COOPERLAKE]  # the Intel host with AMX wrote these bytes too when they were recorded
 EPISODES, AGENTVIEW_MP4, WRIST_MP4 = (
     "meta/episodes/chunk-000/file-000.parquet",
     "videos/observation.images.agentview/chunk-000/file-000.mp4",
     "videos/observation.images.wrist/chunk-000/file-000.mp4",
 )
 AMD_EPYC_AVX512 = "AuthenticAMD avx512f"
+AMD_ALIKE = {  # what the AMD host renders alike under both numeric families (videos re-recorded for the constant quantiser)
+    "object": {
+        AGENTVIEW_MP4: "bffd9dc3259c671eb200f6c99dfc20ab0821af47",
+        WRIST_MP4: "90365546db22b46fc00333ab3854b698243b7bc5",
+    },
+    "goal": {
+        EPISODES: "ff9e08358e660c1a10f5629f09db58f14ee9fc6f",
+        AGENTVIEW_MP4: "b33f2fddfc8515a56ef376dd5361e691238b1dda",
+        WRIST_MP4: "81de54e289e3a12b2bd558818e499ab54bac5687",
+    },
+}
 RENDERED = {  # (processor family, numeric family) -> case -> rendered files' hashes
-    # Intel with AMX: recorded at commit 2f5bc96, its BLAS kernel not noted then (OpenBLAS names it
-    # SapphireRapids there); its videos were not re-recorded (see above)
-    ("GenuineIntel avx512f amx_tile", "openblas SapphireRapids, numpy AVX512_SKX"): {
+    # Intel with AMX: recorded at commit 2f5bc96 (its BLAS kernel was not noted then); its videos
+    # were not re-recorded (see above)
+    ("GenuineIntel avx512f amx_tile", SAPPHIRE_RAPIDS): {
         "object": {
             EPISODES: "a1a71da3bb8ac17bf49f94b094ff2af0df7fb6c2",
         },
@@ -90,29 +103,13 @@ RENDERED = {  # (processor family, numeric family) -> case -> rendered files' ha
             EPISODES: "9efca67f9dbecbc0629828313198fc38d43cfe49",
         },
     },
-    (AMD_EPYC_AVX512, COOPERLAKE): {  # videos re-recorded for the constant quantiser
-        "object": {
-            EPISODES: "a938e7ef68e594ce66e0396c3341cdcfcdad1475",
-            AGENTVIEW_MP4: "bffd9dc3259c671eb200f6c99dfc20ab0821af47",
-            WRIST_MP4: "90365546db22b46fc00333ab3854b698243b7bc5",
-        },
-        "goal": {
-            EPISODES: "ff9e08358e660c1a10f5629f09db58f14ee9fc6f",
-            AGENTVIEW_MP4: "b33f2fddfc8515a56ef376dd5361e691238b1dda",
-            WRIST_MP4: "81de54e289e3a12b2bd558818e499ab54bac5687",
-        },
+    (AMD_EPYC_AVX512, COOPERLAKE): {
+        "object": {EPISODES: "a938e7ef68e594ce66e0396c3341cdcfcdad1475", **AMD_ALIKE["object"]},
+        "goal": AMD_ALIKE["goal"],
     },
     (AMD_EPYC_AVX512, HASWELL): {
-        "object": {
-            EPISODES: "7557e3fa0afe8763843e0173779a40c0e199d317",
-            AGENTVIEW_MP4: "bffd9dc3259c671eb200f6c99dfc20ab0821af47",
-            WRIST_MP4: "90365546db22b46fc00333ab3854b698243b7bc5",
-        },
-        "goal": {
-            EPISODES: "ff9e08358e660c1a10f5629f09db58f14ee9fc6f",
-            AGENTVIEW_MP4: "b33f2fddfc8515a56ef376dd5361e691238b1dda",
-            WRIST_MP4: "81de54e289e3a12b2bd558818e499ab54bac5687",
-        },
+        "object": {EPISODES: "7557e3fa0afe8763843e0173779a40c0e199d317", **AMD_ALIKE["object"]},
+        "goal": AMD_ALIKE["goal"],
     },
 }
 
