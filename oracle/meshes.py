@@ -16,15 +16,13 @@ seconds and every worker process builds its own scene.
 from __future__ import annotations
 
 import functools
-import hashlib
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from core import cache_dir
+from core import derived_file, keep
 
 MAX_FACES = 2000
 OBJECT_FACES = 3000
@@ -62,8 +60,7 @@ def lighten(root: ET.Element, objects: bool = False, faces: dict[str, int] | Non
 
 def _cached(file: str, tag: str, make: Callable[[Path], dict[str, np.ndarray] | None]) -> dict[str, np.ndarray] | None:
     """`make(file)`, kept on disk under the file's content hash and `tag`; None: nothing to lighten."""
-    data = Path(file).read_bytes()
-    cache = cache_dir() / "meshes" / f"{hashlib.sha256(data).hexdigest()[:24]}-{tag}.npz"
+    cache = derived_file("meshes", Path(file), tag, ".npz")
     try:
         with np.load(cache) as npz:
             return {k: npz[k] for k in npz.files} if len(npz["faces"]) else None
@@ -71,13 +68,7 @@ def _cached(file: str, tag: str, make: Callable[[Path], dict[str, np.ndarray] | 
         pass
     light = make(Path(file))
     arrays = light if light is not None else {"vertices": np.zeros((0, 3)), "faces": np.zeros((0, 3), np.int64)}
-    try:  # the cache only saves time: an unwritable home must not stop a run
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        tmp = cache.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, **arrays)
-        tmp.replace(cache)
-    except OSError:
-        pass
+    keep(cache, lambda tmp: np.savez(tmp, **arrays))
     return light
 
 

@@ -14,12 +14,10 @@ keyed by the file's bytes).
 
 from __future__ import annotations
 
-import hashlib
-import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from core import cache_dir
+from core import derived_file, keep
 
 TEXTURE_SIDE = 1024  # texels: the largest side a texture image keeps
 
@@ -37,21 +35,14 @@ def halved(file: str, side: int = TEXTURE_SIDE) -> Path:
     """The image file, or a cached copy of it halved (2 x 2 box) until no side exceeds `side`."""
     from PIL import Image
 
-    data = Path(file).read_bytes()
-    cache = cache_dir() / "textures" / f"{hashlib.sha256(data).hexdigest()[:24]}-{side}.png"
+    with Image.open(file) as image:  # reads the header only
+        if max(image.size) <= side:
+            return Path(file)
+    cache = derived_file("textures", Path(file), str(side), ".png")
     if cache.is_file():
         return cache
     with Image.open(file) as image:
-        if max(image.size) <= side:
-            return Path(file)
         image = image.convert("RGBA" if "A" in image.getbands() else "RGB")
         while max(image.size) > side:
             image = image.reduce(2)
-    try:  # the cache only saves time: an unwritable home keeps the full-size file
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        tmp = cache.with_suffix(f".{os.getpid()}.tmp.png")
-        image.save(tmp)
-        tmp.replace(cache)
-    except OSError:
-        return Path(file)
-    return cache
+    return cache if keep(cache, image.save) else Path(file)

@@ -135,15 +135,19 @@ def test_the_ik_model_keeps_the_robots_kinematics() -> None:
         assert np.array_equal(getattr(light, field), getattr(full, field)), field
 
 
-def test_large_textures_are_halved_by_two_by_two_averages(tmp_path: Path) -> None:
+def test_large_textures_are_halved_by_two_by_two_averages(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from PIL import Image
 
     from oracle.textures import halved
 
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # the copy goes to this test's cache
+
     rng = np.random.default_rng(0)
     pixels = rng.integers(0, 256, (8, 16, 3), dtype=np.uint8)
     Image.fromarray(pixels).save(tmp_path / "big.png")
-    small = np.asarray(Image.open(halved(str(tmp_path / "big.png"), side=4)))
+    copy = halved(str(tmp_path / "big.png"), side=4)
+    assert copy.parent == tmp_path / "cache" / "deconfound" / "textures"
+    small = np.asarray(Image.open(copy))
     expected = pixels.reshape(2, 4, 4, 4, 3).mean(axis=(1, 3))  # two halvings: 4 x 4 blocks
     assert small.shape == (2, 4, 3)
     assert np.abs(small - expected).max() <= 1.0  # each halving rounds once
