@@ -24,6 +24,9 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 }
 
 
+RIM_DEPTH = 0.015
+
+
 @dataclass(frozen=True)
 class Kind:
     """A buildable object.
@@ -49,6 +52,7 @@ class Kind:
     inner: float = 0.0
     quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # resting orientation (w, x, y, z) before the object's yaw
     contain: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # (centre offset, half size)
+    rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
 
     @property
     def height(self) -> float:
@@ -59,8 +63,9 @@ class Kind:
         return surface_z + self.bottom
 
     def grasp_depth(self) -> float:
-        """How far below the top the fingers close: near the top for tall objects."""
-        return min(0.03, self.height / 2)
+        """How far below the top the fingers close: near the top for tall objects, and just
+        below a bowl's rim, so the inner finger stays clear of its floor."""
+        return min(RIM_DEPTH if self.rim else 0.03, self.height / 2)
 
 
 def _cube(side: float) -> dict[str, Any]:

@@ -11,6 +11,10 @@ scorer judges logged rollouts with the same predicates.
           and is not held above it; the destination itself stayed put.
 * pick_place — the target ends inside the container `params.destination`: its origin in the
           container's `contain` box (LIBERO's `In` predicate, as LIBERO-Object's goals use it).
+* pick_place_on — the target ends on `params.destination`: LIBERO's `On` (as LIBERO-Spatial's
+          goals use it): its origin within 3 cm of the destination's (horizontally) and not below
+          it, and resting on it (its bottom at most 2 cm above the destination's top: positions
+          stand in for LIBERO's contact test).
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ PUSH_MARGIN = 0.05
 SLIDE_MAX_RISE = 0.02
 PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
 CONTAIN_FLOOR = 0.01  # LIBERO's `in_box` lowers the container box's floor by this much
+ON_RADIUS = 0.03  # LIBERO's `check_ontop`: origins this close horizontally
 
 
 @dataclass(frozen=True)
@@ -80,7 +85,18 @@ def contained(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
     return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - CONTAIN_FLOOR < d[2] < half[2])
 
 
-PREDICATES = {"pick": lifted, "push": pushed, "place": placed, "pick_place": contained}
+def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
+    """LIBERO's `On(target, destination)` (envs/object_states `check_ontop`), from positions."""
+    destination = spec.task.params["destination"]
+    dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    carried = worlds.kind(spec.object(target).kind, spec.sim.world)
+    t_end, d_end = np.asarray(outcome.end[target]), np.asarray(outcome.end[destination])
+    near = float(np.hypot(*(t_end[:2] - d_end[:2]))) < ON_RADIUS
+    resting = t_end[2] - carried.bottom <= d_end[2] - dest.bottom + dest.height + PLACE_MAX_HOVER
+    return near and t_end[2] >= d_end[2] and resting
+
+
+PREDICATES = {"pick": lifted, "push": pushed, "place": placed, "pick_place": contained, "pick_place_on": on}
 
 
 def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:

@@ -1,13 +1,13 @@
-"""`python -m gen.canonical world=libero_object`: an exam on LIBERO's own initial states.
+"""`python -m gen.canonical world=libero_object` (or libero_spatial): an exam on LIBERO's own initial states.
 
 Its task rows are exactly a LIBERO suite's tasks: LIBERO's initial states (every one of the 50
 per task, or `states=` of them drawn with `seed=`), LIBERO's instructions, the rollout horizon
-and settle steps lerobot's LIBERO environment uses. On each state a swap row names every other
-grocery in the scene instead (LIBERO-PRO's one rename per task, `libero_object_task`, is one of
-them), and occ and nonsense rows follow, as in every exam (core/exam.py). A LIBERO-trained
-policy's task rate here is its published LIBERO number; its swap rate is whether it reads the
-name. The `position` policy is the shortcut LIBERO's layouts reward: it knows the scene and
-fetches what stands in that task's target region.
+and settle steps lerobot's LIBERO environment uses. On each state the swap rows are the world's
+referent type's (its `canonical` design of the task: in LIBERO-Object every other grocery, in
+LIBERO-Spatial the other bowl, named by where it stands), and occ and nonsense rows follow, as
+in every exam (core/exam.py). A LIBERO-trained policy's task rate here is its published LIBERO
+number; its swap rate is whether it reads the instruction. The `position` policy is the
+shortcut LIBERO's layouts reward: it knows the scene and fetches what that task's target was.
 
 The states are LIBERO's exactly (joints set by name from LIBERO's state vectors), so the first
 settle steps show what they show in LIBERO: objects placed slightly into the floor pop up and
@@ -27,7 +27,7 @@ import numpy as np
 import referents
 from core import exam, worlds
 from core.layout import STATE_KEY, TASK_KEY, layout
-from core.spec import Counterfactual, EpisodeSpec, SceneObject, SimSettings, TaskSpec, yaw_of
+from core.spec import EpisodeSpec, SceneObject, SimSettings, yaw_of
 from core.worlds import libero
 from gen.audit import audit
 from gen.cli import UserError, main
@@ -37,8 +37,6 @@ from referents import Referent
 
 if TYPE_CHECKING:
     from oracle.scene import Scene
-
-NAME_TEMPLATE = "pick up the {name} and place it in the basket"  # LIBERO-Object's instructions, word for word
 
 
 @dataclass
@@ -68,7 +66,8 @@ def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
         raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
     out = Path(options.out or f"datasets/{world.name}-canonical")
     check_output(out, options.overwrite)
-    return world, referents.load(referents.of_world(world.name)[0]), out
+    referent = referents.load(next(r for r in referents.of_world(world.name) if referents.load(r).code.canonical is not None))
+    return world, referent, out
 
 
 def _libero_worlds() -> str:
@@ -76,33 +75,29 @@ def _libero_worlds() -> str:
 
 
 def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:
-    """A LIBERO task's scene as an episode spec: its objects in the regions its BDDL puts them
-    (poses come from the initial state), its instruction, a swap to every other grocery."""
+    """A LIBERO task's scene as an episode spec (the referent type's `canonical` design of it):
+    its objects under the design's ids, each where the task's region puts it until the initial
+    state poses it, LIBERO's instruction, the swaps."""
     problem = libero.problem(world.suite, task)
-    names = {c.kind: c.name for c in referent.config.objects}
-    slots = referent.config.layout.slots
+    assert referent.code.canonical is not None
+    design = referent.code.canonical(referent.config, problem)
     objects = []
-    for instance, kind in problem.objects.items():
-        x, y = problem.centre(problem.region_of(instance))
-        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy in slots]))
-        z = world.kind(kind).rest_z(world.surface_z)
-        objects.append(SceneObject(kind, kind, names.get(kind, kind.replace("_", " ")), slot, (x, y, z)))
-    target = problem.objects[problem.goal[0][1]]  # (In <target> <container>_contain_region)
-    container = problem.objects[problem.goal[0][2].removesuffix("_contain_region")]
-    others = [o for o in objects if o.id not in (target, container)]
-    say = NAME_TEMPLATE.format
-    counterfactuals = tuple(Counterfactual(say(name=o.name), o.id, (names[target], o.name)) for o in others)
+    for p in design.placements:
+        kind = world.kind(p.candidate.kind)
+        x, y, *_ = referent.config.layout.slots[p.slot]
+        z = kind.rest_z(referent.config.layout.surface(p.slot, world.surface_z))
+        objects.append(SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, (x, y, z), attributes=dict(p.candidate.attributes)))
     return EpisodeSpec(
         referent=referent.name,
         index=index,
         seed=seed,
         objects=tuple(objects),
-        target=target,
-        instruction=libero.language(task),
-        template=NAME_TEMPLATE,
-        counterfactuals=counterfactuals,
+        target=design.target,
+        instruction=design.instruction,
+        template=design.template,
+        counterfactuals=design.counterfactuals,
         assets=referent.assets(),
-        task=TaskSpec(program="pick_place", params={"destination": container}),
+        task=design.task or referent.config.task,
         sim=sim,
         split="exam",
     )

@@ -57,9 +57,9 @@ def realize(
     for p in design.placements:
         kind = world.kind(p.candidate.kind)
         jitter = layout.jitter_at(p.slot)
-        x, y = np.asarray(layout.slots[p.slot]) + rng.uniform(-jitter, jitter, 2)
+        x, y = np.asarray(layout.slots[p.slot][:2]) + rng.uniform(-jitter, jitter, 2)
         yaw = rng.uniform(*layout.yaw)
-        pos = (round(float(x), 5), round(float(y), 5), round(kind.rest_z(world.surface_z), 5))
+        pos = (round(float(x), 5), round(float(y), 5), round(kind.rest_z(layout.surface(p.slot, world.surface_z)), 5))
         objects.append(
             SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, pos, round(float(yaw), 5), dict(p.candidate.attributes))
         )

@@ -45,6 +45,7 @@ FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
+LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
 HIDDEN_GROUP = 5  # geoms of parked bodies move to this group, which no camera draws (oracle/render.py)
@@ -80,11 +81,16 @@ def libero_folder(kind: catalog.Kind) -> Path:
 
 
 def _libero_arena(world: worlds.World) -> Arena:
-    """LIBERO's arena file with its floor and wall textures (LIBERO's EmptyArena), its cameras set
-    as the world's problem class sets them."""
+    """LIBERO's arena file with its floor and wall textures (LIBERO's EmptyArena, or its TableArena
+    where the world has a table), its cameras set as the world's problem class sets them."""
     from core.worlds import libero
 
-    arena = Arena(str(libero.assets_root() / world.arena["scene"]))
+    scene = str(libero.assets_root() / world.arena["scene"])
+    if world.table is None:
+        arena = Arena(scene)
+    else:
+        size, top = world.table
+        arena = TableArena(table_full_size=size, table_offset=top, table_friction=LIBERO_TABLE_FRICTION, xml=scene)
     for texture, file in (("texplane", world.arena["floor"]), ("tex-wall", world.arena["wall"])):
         node = arena.asset.find(f"./texture[@name='{texture}']")
         node.set("file", str(Path(node.get("file")).parent / file))
@@ -92,6 +98,19 @@ def _libero_arena(world: worlds.World) -> Arena:
     cam = world.agentview
     arena.set_camera(camera_name=NATIVE.cameras[AGENTVIEW], pos=list(cam.pos), quat=list(cam.quat))
     return arena
+
+
+def _fixture(placed: worlds.Placed) -> rs_objects.MujocoObject:
+    """A world's fixture as LIBERO loads it (no free joint), its body where the world puts it."""
+    from core.worlds import libero
+
+    fixture = rs_objects.MujocoXMLObject(
+        str(libero.assets_root() / placed.fixture.xml), name=placed.name, joints=None, obj_type="all", duplicate_collision_geoms=False
+    )
+    body = fixture.get_obj()
+    body.set("pos", " ".join(map(str, placed.pos)))
+    body.set("quat", " ".join(map(str, yaw_quat(placed.yaw))))
+    return fixture
 
 
 def _lookat_quat(pos: tuple[float, ...], target: tuple[float, ...]) -> np.ndarray:
@@ -153,6 +172,7 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     else:
         arena = _libero_arena(world)
     objects = [_build_object(world.kind(kind), world.body_name(kind, i)) for kind, count in sorted(assets) for i in range(count)]
+    objects += [_fixture(placed) for placed in world.fixtures]
     task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot(world)], mujoco_objects=objects)
     root = ET.fromstring(task.get_xml())
     if controller == NATIVE.controller:

@@ -129,10 +129,15 @@ class Skills:
         kind = self._kind(object_id)
         pos = self.scene.object_pos(object_id)  # where it stood before the hand came near
         top = contact.top(kind, pos)
+        point = contact.grasp_point(kind, pos)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
+        if kind.rim:  # fingers across the wall on the side facing the robot's base, closing along its radius
+            toward = np.subtract(self.scene.world.robot_base[:2], pos[:2])
+            axis = float(np.arctan2(toward[1], toward[0]))
+            point[:2] = top[:2] = pos[:2] + kind.rim * toward / np.linalg.norm(toward)
         yaw = grasp_yaw(axis)
         self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
-        self.move_to(contact.grasp_point(kind, pos), yaw)
+        self.move_to(point, yaw)
         self.close()
         self.held = (object_id, contact.grip_height(kind))
 
@@ -145,6 +150,8 @@ class Skills:
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
         over = self.top_of(destination_id)
+        if self._kind(self.held[0]).rim:  # held off-centre: the hand goes where the object's centre comes over the destination
+            over[:2] -= self.scene.object_pos(self.held[0])[:2] - self.scene.ee_pos()[:2]
         release_z = contact.release_point(
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]

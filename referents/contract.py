@@ -25,6 +25,7 @@ import numpy as np
 from core import worlds
 from core.demo import Plan, Skills
 from core.spec import EpisodeSpec, TaskSpec
+from core.worlds.libero import Problem
 from referents.balance import Balance
 from referents.design import Design
 from referents.features import Alternative, object_alternatives
@@ -62,6 +63,7 @@ class TypeModule:
     assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
     validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
     shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical  # what `position` demonstrates
+    canonical: Callable[[ReferentConfig, Problem], Design] | None = None  # a LIBERO task's own scene (gen.canonical); LIBERO worlds' types
     CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
 
     def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from core import worlds
 from core.demo import Skills
-from core.spec import EpisodeSpec
+from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from core.worlds import libero
 from referents.balance import Balance
 from referents.compose import naming_design, slug
@@ -58,6 +58,32 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
 
 def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
     return [*ReferentConfig.assets(cfg), (_container(cfg).kind, 1)]
+
+
+def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
+    """A LIBERO-Object task's scene: its objects (each in the slot nearest its region), LIBERO's
+    instruction, and a swap to every other grocery (LIBERO-PRO's one rename per task,
+    `libero_object_task`, is one of them), said as LIBERO says it."""
+    names = {c.kind: c for c in cfg.objects}
+    container = _container(cfg)
+    placements = []
+    for instance, kind in problem.objects.items():
+        x, y = problem.centre(problem.region_of(instance))
+        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy in cfg.layout.slots]))
+        placements.append(Placement(kind, names.get(kind, container), slot))
+    target = problem.objects[problem.goal[0][1]]  # (In <target> <container>_contain_region)
+    destination = problem.objects[problem.goal[0][2].removesuffix("_contain_region")]
+    template = cfg.templates[0]
+    say = template.format
+    others = [p for p in placements if p.id not in (target, destination)]
+    return Design(
+        placements=tuple(placements),
+        target=target,
+        template=template,
+        instruction=libero.language(problem.name),
+        counterfactuals=tuple(Counterfactual(say(name=p.candidate.name), p.id, (names[target].name, p.candidate.name)) for p in others),
+        task=TaskSpec(program=cfg.task.program, params={"destination": destination}),
+    )
 
 
 def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:

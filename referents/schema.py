@@ -54,11 +54,12 @@ class Candidate:
 
 @dataclass(frozen=True)
 class Layout:
-    """Where objects may stand: slot centres (x, y) on the table, jitter, yaw range, and the
+    """Where objects may stand: slot centres (x, y) on the table (or (x, y, z) on something at
+    height z: a box, a cabinet), jitter, yaw range, and the
     canonical slot a `confound=position` dataset always puts the target in: one for every
     target, or one per target value (e.g. LIBERO's target_object_region of each task)."""
 
-    slots: tuple[tuple[float, float], ...]
+    slots: tuple[tuple[float, ...], ...]
     jitter: float | tuple[float, ...] = 0.02  # one for every slot, or one per slot
     yaw: tuple[float, float] = (-np.pi, np.pi)
     canonical_slot: int | dict[str, int] = 0
@@ -67,6 +68,10 @@ class Layout:
         """The canonical slot of a target whose naming value (or key) is `value`."""
         slots = self.canonical_slot
         return slots if isinstance(slots, int) else slots[value]
+
+    def surface(self, slot: int, default: float) -> float:
+        """The height of what an object in `slot` stands on (`default`: the world's surface)."""
+        return self.slots[slot][2] if len(self.slots[slot]) == 3 else default
 
     def jitter_at(self, slot: int) -> float:
         """How far (m, along x and y) an object may stand from the slot's centre."""
@@ -251,7 +256,9 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
     if not isinstance(raw, dict) or "slots" not in raw:
         raise fail("layout.slots", "missing field")
     try:
-        slots = tuple((float(x), float(y)) for x, y in raw["slots"])
+        slots = tuple(tuple(float(v) for v in slot) for slot in raw["slots"])
+        if any(len(slot) not in (2, 3) for slot in slots):
+            raise ValueError("a slot is [x, y] or [x, y, z]")
         yaw = tuple(float(v) for v in raw.get("yaw", (-np.pi, np.pi)))
         jitter = raw.get("jitter", 0.02)
         jitter = tuple(float(j) for j in jitter) if isinstance(jitter, list) else float(jitter)
@@ -261,9 +268,9 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
         canonical = {str(k): int(v) for k, v in canonical.items()} if isinstance(canonical, dict) else int(canonical)
         layout = Layout(slots, jitter, yaw, canonical)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise fail("layout", "slots must be [x, y] pairs, jitter a number (or one per slot), yaw [min, max]") from None
+        raise fail("layout", "slots must be [x, y] (or [x, y, the height of what the object stands on]), jitter a number (or one per slot), yaw [min, max]") from None
     x0, x1, y0, y1 = world.reach
-    for i, (x, y) in enumerate(layout.slots):
+    for i, (x, y, *_) in enumerate(layout.slots):
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             raise fail(
                 f"layout.slots[{i}]",

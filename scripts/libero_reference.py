@@ -9,14 +9,17 @@ Commands (the request is JSON; what comes back is written to <out>):
 * `render` — {"suite", "size", "cases": [[task, state], ...]}: LIBERO's `OffScreenRenderEnv` at
   each of its own initial states; <out> (.npz) gets `<task>-<state>-agentview` and
   `-eye_in_hand` frames as LIBERO returns them (robosuite's raw, upside-down OpenGL frames),
-  and `-objects` ([instance, x, y, z] rows of every object's body position).
+  `-objects` ([instance, x, y, z] rows of every object's body position) and `-fixtures` (each
+  fixture's body pose, which LIBERO draws anew at every reset).
 * `replay` — {"episodes": [{"objects": [{"instance", "kind", "pos", "quat"}], "target",
   "container", "arm", "fingers", "actions"}]}: a BDDL problem of LIBERO's floor scene holding
   every object of the request, with goal `(In <target> <container>_contain_region)`, is written
   for each goal, LIBERO's environment is made from it and set to each episode's recorded initial
   state (joints by name; objects the episode does not use on the floor out of reach), the
   actions are stepped, and <out> (.json) gets, per episode, `check_success()` after the last
-  action and each object's final position.
+  action and each object's final position. With `"suite": "libero_spatial"` the problem is
+  instead that suite's own table with goal `(On <target> <container>)`, its fixtures posed as
+  the request's `fixtures` say.
 * `model` — {"suite", "task"}: the compiled physics of a task's scene; <out> (.npz) gets
   `<array>:<name>` for every body's mass and inertia, every joint's damping, armature,
   friction loss and range, every colliding geom's shape, pose, friction and contact
@@ -73,6 +76,13 @@ def _positions(env) -> list[list]:  # noqa: ANN001
     return [[name, *map(float, sim.data.body_xpos[body])] for name, body in bodies.items()]
 
 
+def _fixtures(env) -> list[list]:  # noqa: ANN001
+    """[name, x, y, z, qw, qx, qy, qz] of every fixture body: LIBERO draws their poses anew at each reset."""
+    model = env.sim.model
+    bodies = {name: model.body_name2id(obj.root_body) for name, obj in env.env.fixtures_dict.items()}
+    return [[name, *map(float, model.body_pos[b]), *map(float, model.body_quat[b])] for name, b in bodies.items()]
+
+
 def render(request: dict, out: str) -> None:
     arrays = {}
     by_task: dict[int, list[int]] = {}
@@ -87,6 +97,7 @@ def render(request: dict, out: str) -> None:
             for cam in CAMERAS:
                 arrays[f"{task}-{state}-{cam}"] = obs[f"{cam}_image"]
             arrays[f"{task}-{state}-objects"] = np.array(_positions(env), dtype=object)
+            arrays[f"{task}-{state}-fixtures"] = np.array(_fixtures(env), dtype=object)
         env.close()
     np.savez(out, **arrays)
 
@@ -113,10 +124,21 @@ def _bddl(objects: dict[str, str], target: str, container: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _suite_bddl(suite: str, target: str, destination: str) -> str:
+    """A suite's first task's problem (its table, fixtures and objects) with goal `(On <target> <destination>)`."""
+    bddl, _ = _task_bddl(suite, 0)
+    with open(bddl) as f:
+        text = f.read()
+    start = text.index("(:goal")
+    return text[:start] + f"(:goal (And (On {target} {destination})))\n)\n"
+
+
 def replay(request: dict, out: str) -> None:
     """Episodes that ask for the same goal share one environment holding every object of the
-    request; an episode's absent objects stand on the floor out of reach."""
-    episodes = request["episodes"]
+    request; an episode's absent objects stand on the floor out of reach. With a `suite`
+    (LIBERO-Spatial's), the environment is that suite's scene, its fixtures posed as the request's
+    `fixtures` ([name, x, y, z, qw, qx, qy, qz]) put them, and its goal LIBERO's `On`."""
+    episodes, suite = request["episodes"], request.get("suite")
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
     rest = {o["instance"]: o for e in episodes for o in e["objects"]}  # any recorded pose: its resting orientation
     goals: dict[tuple[str, str], list[int]] = {}
@@ -127,11 +149,14 @@ def replay(request: dict, out: str) -> None:
         for (target, container), indices in goals.items():
             bddl = os.path.join(tmp, f"{target}.bddl")
             with open(bddl, "w") as f:
-                f.write(_bddl(objects, target, container))
+                f.write(_suite_bddl(suite, target, container) if suite else _bddl(objects, target, container))
             env = _env(bddl, 32, cameras=False)
             for i in indices:
                 env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
                 model, episode = env.sim.model, episodes[i]
+                for name, *pose in request.get("fixtures", []):
+                    body = model.body_name2id(env.env.fixtures_dict[name].root_body)
+                    model.body_pos[body], model.body_quat[body] = pose[:3], pose[3:]
                 qpos = np.array(env.sim.data.qpos)
                 for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
                     qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
 from pathlib import Path
 
 import mujoco
@@ -11,6 +13,24 @@ from core.layout import NATIVE
 from gen.config import parse
 from gen.run import generate
 from oracle.scene import Scene
+
+
+ROOT = Path(__file__).resolve().parent.parent
+LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
+
+
+def liberos_own(command: str, request: dict, out: Path) -> Path:
+    """Run a command of scripts/libero_reference.py in LIBERO's own environment (`.venv-libero`)."""
+    assert LIBERO_PYTHON.is_file(), f"{LIBERO_PYTHON} is missing: `make setup` builds LIBERO's reference environment"
+    request_file = out.with_name(out.name + ".request.json")
+    request_file.write_text(json.dumps(request))
+    done = subprocess.run(
+        [str(LIBERO_PYTHON), str(ROOT / "scripts" / "libero_reference.py"), command, str(request_file), str(out)],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:

@@ -26,29 +26,13 @@ from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.lerobot_reader import LeRobotReader
 from gen.plan import default_sim
-from helpers import make_dataset
+from helpers import liberos_own, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
 
-ROOT = Path(__file__).resolve().parent.parent
-REFERENCE = ROOT / ".venv-libero" / "bin" / "python"
 SUITE = "libero_object"
-sys.path.insert(0, str(ROOT / "scripts"))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
-
-
-def liberos_own(command: str, request: dict, out: Path) -> Path:
-    """Run a command of scripts/libero_reference.py in LIBERO's own environment."""
-    assert REFERENCE.is_file(), f"{REFERENCE} is missing: `make setup` builds LIBERO's reference environment"
-    request_file = out.with_name(out.name + ".request.json")
-    request_file.write_text(json.dumps(request))
-    done = subprocess.run(
-        [str(REFERENCE), str(ROOT / "scripts" / "libero_reference.py"), command, str(request_file), str(out)],
-        capture_output=True,
-        text=True,
-    )
-    assert done.returncode == 0, done.stderr[-3000:]
-    return out
 
 
 @pytest.fixture(scope="module")

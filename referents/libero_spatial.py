@@ -1,0 +1,180 @@
+"""LIBERO-Spatial's relation axis: the black bowl named by where it stands goes on the plate (see
+libero_spatial.yaml).
+
+A scene is a pair of places (any two whose words mention nothing in common and that stand
+`min_gap` apart) with an identical bowl in each, and the named one is either, equally often per
+pair; the plate, the cookie box and the ramekin stand in their LIBERO places in every scene. The
+swap names the other bowl by its own place. Only the two bowls are alternatives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from dataclasses import replace as replaced
+from itertools import combinations
+
+import numpy as np
+
+from core import worlds
+from core.demo import Skills
+from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
+from core.worlds import libero
+from referents.balance import Balance
+from referents.design import Design, Placement
+from referents.features import POSITION, Alternative, Feature, object_alternatives
+from referents.schema import Candidate, ReferentConfig
+
+CONFOUNDS = ("position",)
+
+
+@dataclass(frozen=True)
+class _Place:
+    """Where a bowl may stand: its layout slot (None: only LIBERO's initial states use it), the
+    words that say so, what they mention, and the BDDL region LIBERO's tasks put a bowl in there."""
+
+    slot: int | None
+    says: str
+    mentions: frozenset[str]
+    region: str
+
+
+def _places(cfg: ReferentConfig, elsewhere: bool = False) -> list[_Place]:
+    fields = cfg.need("places", list) + (cfg.extra.get("elsewhere", []) if elsewhere else [])
+    return [_Place(f.get("slot"), str(f["says"]), frozenset(f.get("mentions", [])), str(f["region"])) for f in fields]
+
+
+def _slot(place: _Place) -> int:
+    assert place.slot is not None, f"{place.says!r} has no layout slot"
+    return place.slot
+
+
+def _pairs(cfg: ReferentConfig) -> list[tuple[_Place, _Place]]:
+    """The pairs of places two bowls can stand in: apart, and said without a word in common."""
+    gap = float(cfg.extra.get("min_gap", 0.12))
+    slots = cfg.layout.slots
+    return [
+        (a, b)
+        for a, b in combinations(_places(cfg), 2)
+        if not a.mentions & b.mentions and np.hypot(*np.subtract(slots[_slot(a)][:2], slots[_slot(b)][:2])) >= gap
+    ]
+
+
+def _bowl(cfg: ReferentConfig) -> Candidate:
+    return cfg.role("referent")[0]
+
+
+def _others(cfg: ReferentConfig) -> list[Placement]:
+    """The plate, the cookie box and the ramekin, in the layout's slots after the bowls' places."""
+    first = len(_places(cfg))
+    stands = [*cfg.role("destination"), *cfg.role("fixed")]
+    return [Placement(c.name.replace(" ", "_"), c, first + i) for i, c in enumerate(stands)]
+
+
+def validate(cfg: ReferentConfig) -> None:
+    try:
+        found = _places(cfg, elsewhere=True)
+    except (KeyError, TypeError, AttributeError):
+        raise cfg.fail("places", "each place needs says and region (and slot, mentions)") from None
+    if any(p.slot is None or not 0 <= p.slot < len(cfg.layout.slots) for p in found[: len(_places(cfg))]):
+        raise cfg.fail("places", "each place needs a slot of layout.slots")
+    if len(cfg.layout.slots) != len(_places(cfg)) + len(cfg.role("destination")) + len(cfg.role("fixed")):
+        raise cfg.fail("layout.slots", "needs one slot per place, then the destination's and each fixed object's")
+    if len(cfg.role("referent")) != 1 or len(cfg.role("destination")) != 1:
+        raise cfg.fail("objects", "needs one object with role: referent (the bowl) and one with role: destination")
+    if not _pairs(cfg):
+        raise cfg.fail("places", "no two places can hold the two bowls together")
+
+
+def _standing(cfg: ReferentConfig, place: _Place) -> Candidate:
+    """The bowl, with where it stands as its `relation` (what the instruction names it by)."""
+    bowl = _bowl(cfg)
+    return replaced(bowl, attributes={**bowl.attributes, cfg.naming: place.says})
+
+
+def _say(template: str, place: _Place) -> str:
+    return template.format(relation=place.says)
+
+
+def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    a, b = balance.pick("pair", [(a.region, b.region) for a, b in _pairs(cfg)])
+    first, second = (next(p for p in _places(cfg) if p.region == r) for r in (a, b))
+    named, other = balance.pick(("named", a, b), [(first, second), (second, first)], also="named")
+    template = balance.pick("template", cfg.templates)
+    ids = {first.region: "bowl_a", second.region: "bowl_b"}
+    bowls = tuple(Placement(ids[p.region], _standing(cfg, p), _slot(p)) for p in (first, second))
+    destination = _others(cfg)[0]
+    return Design(
+        placements=(*bowls, *_others(cfg)),
+        target=ids[named.region],
+        template=template,
+        instruction=_say(template, named),
+        counterfactuals=(Counterfactual(_say(template, other), ids[other.region], (named.says, other.says)),),
+        task=replaced(cfg.task, params={**cfg.task.params, "destination": destination.id}),
+    )
+
+
+def demo(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.target)
+    skills.lift(0.1)
+    skills.place(spec.task.params["destination"])
+
+
+def _place_of(cfg: ReferentConfig, obj: SceneObject) -> _Place:
+    """The place a bowl of a scene stands in (its `relation`)."""
+    return next(p for p in _places(cfg, elsewhere=True) if p.says == obj.attributes[cfg.naming])
+
+
+def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
+    bowls = [o.id for o in spec.objects if o.kind == _bowl(cfg).kind]
+
+    def extra(o: SceneObject) -> dict[str, Feature]:
+        return {"place": Feature(_place_of(cfg, o).region, POSITION)}
+
+    return object_alternatives(cfg, spec, bowls, extra)
+
+
+def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
+    """Two identical bowls, one of everything else."""
+    return [(c.kind, 2 if c.role == "referent" else 1) for c in cfg.objects]
+
+
+def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
+    """A LIBERO-Spatial task's scene: its objects under LIBERO's instance names (each in the slot
+    of its place), LIBERO's instruction, and the swap to the other bowl, named by its own place."""
+    at = {p.region: p for p in _places(cfg, elsewhere=True)}
+    names = {c.kind: c for c in cfg.objects}
+    where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+    target = problem.goal[0][1]  # (On <bowl> plate_1)
+    placements = []
+    for instance, kind in problem.objects.items():
+        place = at.get(where.get(instance, ""))
+        fixed = next((p.slot for p in _others(cfg) if p.candidate.kind == kind), None)
+        slot = fixed if fixed is not None else (place.slot if place is not None and place.slot is not None else 0)
+        placements.append(Placement(instance, _standing(cfg, place) if place is not None else names[kind], slot))
+    other = next(p.id for p in placements if p.candidate.kind == names[problem.objects[target]].kind and p.id != target)
+    template = cfg.templates[0]
+    return Design(
+        placements=tuple(placements),
+        target=target,
+        template=template,
+        instruction=libero.language(problem.name),
+        counterfactuals=(Counterfactual(_say(template, at[where[other]]), other, (at[where[target]].says, at[where[other]].says)),),
+        task=TaskSpec(program=cfg.task.program, params={"destination": problem.goal[0][2]}),
+    )
+
+
+def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
+    """What a policy that learnt LIBERO-Spatial's layouts instead of its words does: it fetches
+    the bowl standing where LIBERO's first task whose bowls stand as these do puts its named bowl
+    (a pair of places no task uses: where the first task naming either place puts it)."""
+    bowls = {_place_of(cfg, o).region: o.id for o in spec.objects if o.kind == _bowl(cfg).kind}
+    suite = worlds.world(cfg.world).suite
+    layouts = []
+    for task in libero.tasks(suite):
+        problem = libero.problem(suite, task)
+        where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+        named = where[problem.goal[0][1]]
+        layouts.append(({where[i] for i, k in problem.objects.items() if k == _bowl(cfg).kind}, named))
+    remembered = next((named for regions, named in layouts if regions == set(bowls)), None)
+    remembered = remembered or next((named for _, named in layouts if named in bowls), next(iter(bowls)))
+    return replaced(spec, target=bowls[remembered])
