@@ -137,7 +137,10 @@ class Skills:
             point[:2] = top[:2] = pos[:2] + kind.rim * toward / np.linalg.norm(toward)
         yaw = grasp_yaw(axis)
         self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
-        self.move_to(point, yaw)
+        if kind.rim:  # straight down onto the wall: a joint-space path could sweep a finger through the bowl
+            self.move_linear(point)
+        else:
+            self.move_to(point, yaw)
         self.close()
         self.held = (object_id, contact.grip_height(kind))
 
@@ -157,7 +160,10 @@ class Skills:
         )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
         self.move_to([over[0], over[1], carry_z])
-        self.move_to([over[0], over[1], release_z])
+        if self._kind(self.held[0]).rim:
+            self.move_linear([over[0], over[1], release_z])
+        else:
+            self.move_to([over[0], over[1], release_z])
         self.open()
         self.move_to([over[0], over[1], release_z + 0.1])
 

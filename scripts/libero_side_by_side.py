@@ -1,5 +1,5 @@
-"""LIBERO's own frames and ours at the same LIBERO-Object initial state, side by side (the README's
-picture): `python scripts/libero_side_by_side.py [task=0] [state=0] [out=docs/libero_object_side_by_side.png]`.
+"""LIBERO's own frames and ours at the same initial state of a LIBERO suite, side by side (the README's
+picture): `python scripts/libero_side_by_side.py [world=libero_object] [task=0] [state=0] [out=docs/<world>_side_by_side.png]`.
 
 Both cameras, as a policy sees them (LIBERO's frames turned 180 degrees, as lerobot's
 LiberoProcessorStep and openpi's client turn them; ours as the libero profile stores them), with
@@ -25,9 +25,10 @@ from gen.cli import UserError, main  # noqa: E402
 
 @dataclass
 class SideBySideOptions:
-    task: int = 0  # LIBERO-Object task (0..9)
+    world: str = "libero_object"  # a LIBERO world: libero_object or libero_spatial
+    task: int = 0  # the suite's task (0..9)
     state: int = 0  # its initial state (0..49)
-    out: str = "docs/libero_object_side_by_side.png"
+    out: str | None = None  # default docs/<world>_side_by_side.png
 
 
 def picture(options: SideBySideOptions) -> None:
@@ -47,13 +48,16 @@ def picture(options: SideBySideOptions) -> None:
     size = LIBERO.image_size
     with tempfile.TemporaryDirectory() as tmp:
         request = Path(tmp) / "request.json"
-        request.write_text(json.dumps({"suite": "libero_object", "size": size, "cases": [[options.task, options.state]]}))
+        request.write_text(json.dumps({"suite": options.world, "size": size, "cases": [[options.task, options.state]]}))
         reference = ROOT / ".venv-libero" / "bin" / "python"
         script = ROOT / "scripts" / "libero_reference.py"
         subprocess.run([str(reference), str(script), "render", str(request), f"{tmp}/f.npz"], check=True, capture_output=True)
         theirs = np.load(f"{tmp}/f.npz", allow_pickle=True)
-        world, referent = worlds.world("libero_object"), referents.load("libero_object")
+        world, referent = worlds.world(options.world), referents.load(options.world)
         scene = scene_for(referent.assets(), "libero", world.name)
+        for name, *pose in theirs[f"{options.task}-{options.state}-fixtures"].tolist():  # LIBERO draws these at each reset
+            body = scene.model.body(f"{name}_main").id
+            scene.model.body_pos[body], scene.model.body_quat[body] = pose[:3], pose[3:]
         load_state(scene, referent, world, libero.tasks(world.suite)[options.task], options.state, default_sim(referent))
         cameras = Cameras(scene, size, LIBERO.camera_names)
         ours = {c: f.copy() for c, f in cameras.render().items()}
@@ -67,8 +71,9 @@ def picture(options: SideBySideOptions) -> None:
         sheet.paste(Image.fromarray(ours[camera]), ((2 * i + 1) * size, 0))
         draw.text((2 * i * size + 4, size + 4), f"LIBERO's {model_camera}", fill="black")
         draw.text(((2 * i + 1) * size + 4, size + 4), f"ours ({camera}); mean |diff| {diff:.2f}/255", fill="black")
-    sheet.save(options.out)
-    print(f"wrote {options.out}")
+    out = options.out or f"docs/{options.world}_side_by_side.png"
+    sheet.save(out)
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":
