@@ -66,12 +66,18 @@ def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
         raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
     out = Path(options.out or f"datasets/{world.name}-canonical")
     check_output(out, options.overwrite)
-    referent = referents.load(next(r for r in referents.of_world(world.name) if referents.load(r).code.canonical is not None))
-    return world, referent, out
+    types = [r for r in referents.of_world(world.name) if referents.load(r).code.canonical is not None]
+    if not types:
+        raise UserError(f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}")
+    return world, referents.load(types[0]), out
 
 
 def _libero_worlds() -> str:
     return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
+
+
+def _canonical_worlds() -> str:
+    return ", ".join(name for name in worlds.names() if any(referents.load(r).code.canonical for r in referents.of_world(name)))
 
 
 def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:

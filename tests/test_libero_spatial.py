@@ -117,8 +117,8 @@ def spatial_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Path, world: worlds.World, tmp_path: Path) -> None:
     """Each episode rebuilt in LIBERO-Spatial's own scene from its record alone (LIBERO's instance
     names, poses, robot joints; the fixtures where our world stands them), its recorded actions
-    stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts them. The aim is 90%;
-    16/20 were accepted when this was written (README), so the bound here is 70%."""
+    stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts them: 18/20 when this
+    was written (README); the bound leaves one episode for another host's floating point."""
     reader = LeRobotReader(spatial_dataset)
     episodes = []
     for record in scenes.read(spatial_dataset).itertuples():
@@ -142,7 +142,7 @@ def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Pa
     results = json.loads(liberos_own("replay", request, tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
-    assert len(results) == 20 and succeeded >= 14, f"LIBERO's check_success() accepted {succeeded}/20"
+    assert len(results) == 20 and succeeded >= 17, f"LIBERO's check_success() accepted {succeeded}/20"
 
 
 def test_a_libero_spatial_dataset_loads_and_the_audit_finds_no_leak(spatial_dataset: Path) -> None:

@@ -113,9 +113,9 @@ class World:
 
 
 def _worlds() -> dict[str, World]:
-    from core.worlds import libero_object, libero_spatial, native
+    from core.worlds import libero_goal, libero_object, libero_spatial, native
 
-    return {w.name: w for w in (native.WORLD, libero_object.WORLD, libero_spatial.WORLD)}
+    return {w.name: w for w in (native.WORLD, libero_object.WORLD, libero_spatial.WORLD, libero_goal.WORLD)}
 
 
 def names() -> list[str]:

@@ -77,6 +77,8 @@ KINDS: dict[str, Kind] = {
         _scanned("glazed_rim_porcelain_ramekin", (0.0891, 0.0893, 0.0420), -0.0007),
         _scanned("plate", (0.1375, 0.1376, 0.0189), 0.0025, inner=0.03),
         _hope("cookies", (0.0826, 0.0621, 0.0188), 0.0094, QUARTER),
+        # LIBERO-Goal's bottle (turbosquid_objects), standing
+        Kind("wine_bottle", "libero", (0.0426, 0.0442, 0.1569), -0.0011, "x", params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"}, quat=FLAT),
     )
 }
 
@@ -87,6 +89,7 @@ FIXTURES: dict[str, Fixture] = {
     for f in (
         Fixture("wooden_cabinet", "articulated_objects/wooden_cabinet.xml", ("top_level", "middle_level", "bottom_level")),
         Fixture("flat_stove", "articulated_objects/flat_stove.xml", ("button",)),
+        Fixture("wine_rack", "turbosquid_objects/wine_rack/wine_rack.xml"),
     )
 }
 
