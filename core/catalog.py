@@ -32,7 +32,8 @@ class Kind:
     """A buildable object.
 
     `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
-    arguments (`libero`: LIBERO's model file `params["xml"]`, core/worlds/libero.py); `size` is
+    arguments (`libero`: LIBERO's model file `params["xml"]`; `site`: a place on a fixture, the
+    fixture's site `params["site"]`, which no scene moves; core/worlds/libero.py); `size` is
     the extent (x, y, z) in the object's resting frame (its model frame turned by `quat`),
     `bottom` the height of its lowest point below the body origin, and `grasp_axis` the
     resting-frame axis ("x" or "y") the fingers close along: the narrower one. Colorable kinds

@@ -87,6 +87,8 @@ def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, s
     problem = libero.problem(world.suite, task)
     assert referent.code.canonical is not None
     design = referent.code.canonical(referent.config, problem)
+    if design is None:
+        raise ValueError(f"{task} is not one of referent {referent.name}'s tasks")
     objects = []
     for p in design.placements:
         kind = world.kind(p.candidate.kind)
@@ -109,6 +111,13 @@ def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, s
     )
 
 
+def covered(referent: Referent, world: worlds.World) -> list[str]:
+    """The suite's tasks the referent type can lay out (LIBERO-Goal's drawers and knob are not)."""
+    canonical = referent.code.canonical
+    assert canonical is not None
+    return [t for t in libero.tasks(world.suite) if canonical(referent.config, libero.problem(world.suite, t)) is not None]
+
+
 def build(options: CanonicalOptions) -> None:
     world, referent, out = _options(options)
     from tqdm import tqdm
@@ -118,7 +127,7 @@ def build(options: CanonicalOptions) -> None:
     started = time.perf_counter()
     profile = layout(world.profiles[0])
     sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name)
-    tasks = libero.tasks(world.suite)
+    tasks = covered(referent, world)
     rng = np.random.default_rng(options.seed)
     chosen = {task: sorted(rng.choice(50, options.states, replace=False).tolist()) for task in tasks}
     scene = scene_for(referent.assets(), profile.name, world.name)
@@ -165,7 +174,7 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
         pose = qpos[f"{instance}_joint0"]
         at = tuple(round(float(v), 5) for v in pose[:3])
         objects.append(replace(obj, pos=at, yaw=round(yaw_of(pose[3:], world.kind(obj.kind).quat), 5)))
-    return replace(spec, objects=tuple(objects))
+    return replace(spec, objects=(*objects, *spec.objects[len(objects) :]))  # places on furniture stay
 
 
 def _header(

@@ -45,6 +45,7 @@ FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
+SITE = "site"  # a kind whose model is a fixture's site (core.catalog.Kind): a place on furniture, as an object
 LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
@@ -171,7 +172,8 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
         arena = TableArena(table_full_size=native.TABLE_SIZE, table_offset=(0, 0, native.TABLE_TOP_Z))
     else:
         arena = _libero_arena(world)
-    objects = [_build_object(world.kind(kind), world.body_name(kind, i)) for kind, count in sorted(assets) for i in range(count)]
+    bodies = [(kind, count) for kind, count in sorted(assets) if world.kind(kind).model != SITE]
+    objects = [_build_object(world.kind(kind), world.body_name(kind, i)) for kind, count in bodies for i in range(count)]
     objects += [_fixture(placed) for placed in world.fixtures]
     task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot(world)], mujoco_objects=objects)
     root = ET.fromstring(task.get_xml())
@@ -209,6 +211,7 @@ class Body:
     geom_ids: tuple[int, ...]
     park: np.ndarray  # free-joint qpos when not in the episode
     collision: tuple[tuple[int, int, int], ...]  # compiled (contype, conaffinity, group) of each geom
+    site: int = -1  # a fixture's site standing in for an object (a `site` kind): never moved, never parked
 
 
 class Scene:
@@ -234,6 +237,10 @@ class Scene:
         index = 0
         for kind_name, count in self.assets:
             kind = self.world.kind(kind_name)
+            if kind.model == SITE:  # the fixture's site itself: where it is, the scene's positions read
+                site = m.site(kind.params["site"]).id
+                self.bodies[kind_name] = [Body(kind, int(m.site_bodyid[site]), -1, (), np.zeros(7), (), site)]
+                continue
             for i in range(count):
                 name = self.world.body_name(kind_name, i)
                 joint = m.joint(f"{name}_joint0")
@@ -266,10 +273,11 @@ class Scene:
                 raise ValueError(f"episode {spec.index} needs another {obj.kind!r} but the scene holds {self.assets}")
             body = free[obj.kind].pop(0)
             self.placed[obj.id] = body
-            self._pose(body, obj)
-            self._park(body, False)
+            if body.site < 0:
+                self._pose(body, obj)
+                self._park(body, False)
         for bodies in free.values():
-            for body in bodies:
+            for body in (b for b in bodies if b.site < 0):
                 d.qpos[body.qpos_adr : body.qpos_adr + 7] = body.park
                 self._park(body, True)
         mujoco.mj_forward(m, d)
@@ -326,15 +334,18 @@ class Scene:
         return self.data.site_xpos[self.ee_site].copy()
 
     def object_pos(self, object_id: str) -> np.ndarray:
-        return self.data.xpos[self.placed[object_id].body_id].copy()
+        body = self.placed[object_id]
+        return (self.data.site_xpos[body.site] if body.site >= 0 else self.data.xpos[body.body_id]).copy()
 
     def positions(self) -> dict[str, tuple[float, float, float]]:
         """Where every object of the episode is now."""
-        return {k: tuple(float(v) for v in self.data.xpos[b.body_id]) for k, b in self.placed.items()}  # type: ignore[misc]
+        return {k: tuple(float(v) for v in self.object_pos(k)) for k in self.placed}  # type: ignore[misc]
 
     def object_yaw(self, object_id: str) -> float:
         """How far the object is turned about the world's z from its resting orientation."""
         body = self.placed[object_id]
+        if body.site >= 0:
+            return 0.0
         mat = self.data.xmat[body.body_id].reshape(3, 3)
         if body.kind.quat != IDENTITY:
             rest = np.zeros(9)

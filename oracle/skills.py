@@ -15,7 +15,7 @@ from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from core.success import PUSH_DIRECTION
 from oracle.ik import ArmIK, grasp_yaw
-from oracle.scene import Scene, axis_angle
+from oracle.scene import SITE, Scene, axis_angle
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
@@ -87,8 +87,9 @@ class Skills:
         return contact.top(self._kind(object_id), self.scene.object_pos(object_id))
 
     def clearance(self, margin: float = 0.05) -> float:
-        """A height at which the hand passes over every object in the scene."""
-        return max(self.top_of(o.id)[2] for o in self.spec.objects) + margin
+        """A height at which the hand passes over every object in the scene (places on furniture
+        are not in the way: like the furniture, they stand apart from the objects' places)."""
+        return max(self.top_of(o.id)[2] for o in self.spec.objects if self._kind(o.id).model != SITE) + margin
 
     def move_to(self, pos: np.ndarray, yaw: float | None = None) -> None:
         """Grip site to `pos`, pointing down, at `yaw` (default: keep the current yaw)."""
@@ -159,6 +160,8 @@ class Skills:
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
+        if self._kind(self.held[0]).rim:  # up first: a joint-space path could swing a hanging bowl into furniture
+            self.move_to([*self.scene.ee_pos()[:2], carry_z])
         self.move_to([over[0], over[1], carry_z])
         if self._kind(self.held[0]).rim:
             self.move_linear([over[0], over[1], release_z])

@@ -38,6 +38,15 @@ def _scanned(name: str, size: tuple[float, float, float], bottom: float, **field
     return Kind(name, "libero", size, bottom, params={"xml": f"stable_scanned_objects/{name}/{name}.xml"}, quat=QUARTER, **fields)  # type: ignore[arg-type]
 
 
+def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface: float, inner: float) -> Kind:
+    """A place on a fixture as an object of the scene (model `site`: oracle/scene.py reads where it
+    is and never moves it): LIBERO's region site `site`, of half size `half`, on which things
+    rest `surface` above its centre; `inner` is how far from it their origins may land (LIBERO's
+    `On` of a site: within its box)."""
+    hx, hy, hz = half
+    return Kind(name, "site", (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
+
+
 def _hope(name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y") -> Kind:
     """A grocery from LIBERO's HOPE set (stable_hope_objects)."""
     return Kind(name, "libero", size, bottom, grasp, params={"xml": f"stable_hope_objects/{name}/{name}.xml"}, quat=quat)
@@ -73,10 +82,14 @@ KINDS: dict[str, Kind] = {
         ),
         # LIBERO-Spatial's table: the bowls are picked by the rim (`rim`: the wall's distance from the
         # centre), the plate is where they go (LIBERO's `On` wants the bowl's origin within 3 cm of its)
-        _scanned("akita_black_bowl", (0.1070, 0.1072, 0.0505), -0.0016, rim=0.0445),
+        _scanned("akita_black_bowl", (0.1070, 0.1072, 0.0505), -0.0016, rim=0.0445, inner=0.03),
         _scanned("glazed_rim_porcelain_ramekin", (0.0891, 0.0893, 0.0420), -0.0007),
         _scanned("plate", (0.1375, 0.1376, 0.0189), 0.0025, inner=0.03),
         _hope("cookies", (0.0826, 0.0621, 0.0188), 0.0094, QUARTER),
+        # LIBERO-Goal's places on its furniture: the stove's burner (a bowl settles on it 2.2 cm above
+        # the site) and the cabinet's top
+        _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
+        _on_fixture("cabinet_top", "wooden_cabinet_1_top_side", (0.12534, 0.09438, 0.00147), 0.0015, 0.09),
         # LIBERO-Goal's bottle (turbosquid_objects), standing
         Kind("wine_bottle", "libero", (0.0426, 0.0442, 0.1569), -0.0011, "x", params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"}, quat=FLAT),
     )

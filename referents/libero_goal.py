@@ -1,0 +1,179 @@
+"""LIBERO-Goal's goal axis: the named object goes where the instruction says (see libero_goal.yaml).
+
+The target of an episode is the destination (a place on the stove or the cabinet, the plate, the
+bowl) and `task.params.object` is what to carry, as in the goal referent; the four objects stand
+in the table's places, each in every place equally often, and the stove's burner and the
+cabinet's top are in every scene. The swap keeps the object and names another of its places.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from core import worlds
+from core.demo import Skills
+from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
+from core.worlds import libero
+from referents.balance import Balance
+from referents.compose import slug
+from referents.design import Design, Placement
+from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
+from referents.schema import Candidate, ReferentConfig
+
+CONFOUNDS = ("position",)
+
+
+def _goals(cfg: ReferentConfig) -> dict[str, list[str]]:
+    return {str(k): [str(d) for d in v] for k, v in cfg.need("goals", dict).items()}
+
+
+def _phrase(cfg: ReferentConfig, destination: str) -> str:
+    return str(cfg.need("phrases", dict)[destination])
+
+
+def _named(cfg: ReferentConfig, name: str) -> Candidate:
+    return next(c for c in cfg.objects if c.name == name)
+
+
+def _fixed(cfg: ReferentConfig) -> list[Candidate]:
+    """The destinations on furniture (site kinds): in every scene, in the layout's last slots."""
+    world = worlds.world(cfg.world)
+    return [c for c in cfg.role("destination") if world.kind(c.kind).model == "site"]
+
+
+def _table_slots(cfg: ReferentConfig) -> list[int]:
+    return list(range(len(cfg.layout.slots) - len(_fixed(cfg))))
+
+
+def validate(cfg: ReferentConfig) -> None:
+    names = {c.name for c in cfg.objects}
+    goals = _goals(cfg)
+    if not goals or any(k not in names or not v or any(d not in names for d in v) for k, v in goals.items()):
+        raise cfg.fail("goals", "maps each carried object's name to the names of two or more places it may go")
+    if any(len(v) < 2 for v in goals.values()):
+        raise cfg.fail("goals", "each carried object needs two or more places: the swap names another")
+    if any(d not in cfg.need("phrases", dict) for v in goals.values() for d in v):
+        raise cfg.fail("phrases", "needs the words for every place in goals")
+    movable = [c for c in cfg.objects if c not in _fixed(cfg)]
+    if len(movable) > len(_table_slots(cfg)):
+        raise cfg.fail("layout.slots", "needs a table slot per object, then one per place on furniture")
+
+
+def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    goals = _goals(cfg)
+    carried = _named(cfg, balance.pick("carried", list(goals)))
+    goal = balance.pick(("goal", carried.name), goals[carried.name])
+    other = balance.pick(("other", carried.name, goal), [d for d in goals[carried.name] if d != goal])
+    fixed = _fixed(cfg)
+    placements: list[Placement] = []
+    for cand in (c for c in cfg.objects if c not in fixed):
+        free = [s for s in _table_slots(cfg) if s not in {p.slot for p in placements}]
+        placements.append(Placement(slug(cand.key), cand, balance.pick(("slot", cand.key), free, also="slot")))
+    first = len(_table_slots(cfg))
+    placements += [Placement(slug(c.key), c, first + i) for i, c in enumerate(fixed)]
+    ids = {p.candidate.name: p.id for p in placements}
+    template = balance.pick("template", cfg.templates)
+
+    def say(destination: str) -> str:
+        return template.format(object=carried.name, destination=_phrase(cfg, destination))
+
+    return Design(
+        placements=tuple(placements),
+        target=ids[goal],
+        template=template,
+        instruction=say(goal),
+        counterfactuals=(Counterfactual(say(other), ids[other], (_phrase(cfg, goal), _phrase(cfg, other))),),
+        task=TaskSpec(program=cfg.task.program, params={"object": ids[carried.name]}),
+    )
+
+
+def demo(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.task.params["object"])
+    skills.lift(0.1)
+    skills.place(spec.target)
+
+
+def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
+    carried = spec.object(spec.task.params["object"])
+    places = set(_goals(cfg)[carried.name])
+    destinations = [o.id for o in spec.objects if o.name in places]
+
+    def extra(o: SceneObject) -> dict[str, Feature]:
+        return {
+            "carried object and destination": Feature((carried.name, o.name), IDENTITY),
+            "carried object slot and destination slot": Feature((carried.slot, o.slot), POSITION | IDENTITY),
+        }
+
+    return object_alternatives(cfg, spec, destinations, extra)
+
+
+def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
+    return [(c.kind, 1) for c in cfg.objects]
+
+
+def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Candidate | None:
+    """The place a BDDL name means: an object of the problem, or a fixture's site."""
+    world = worlds.world(cfg.world)
+    kind = problem.objects.get(name)
+    return next(
+        (c for c in cfg.role("destination") + cfg.role("object") if c.kind == kind or world.kind(c.kind).params.get("site") == name),
+        None,
+    )
+
+
+def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
+    """A LIBERO-Goal task's own scene, if its goal is one of ours (`On <object> <place>`): its
+    objects under LIBERO's instance names, LIBERO's instruction, and a swap to each other place
+    the object may go; None for the tasks our skills cannot do (drawers, the knob, pushing)."""
+    predicate, *args = problem.goal[0]
+    if predicate.lower() != "on" or len(problem.goal) != 1:
+        return None
+    carried, destination = problem.objects.get(args[0]), _destination(cfg, problem, args[1])
+    carried_name = next((c.name for c in cfg.role("object") if c.kind == carried), None)
+    if carried_name is None or destination is None or destination.name not in _goals(cfg).get(carried_name, []):
+        return None
+    slots = cfg.layout.slots
+    placements = []
+    for instance, kind in problem.objects.items():
+        x, y = problem.centre(problem.region_of(instance))
+        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in (slots[s] for s in _table_slots(cfg))]))
+        placements.append(Placement(instance, next(c for c in cfg.objects if c.kind == kind), slot))
+    first = len(_table_slots(cfg))
+    placements += [Placement(slug(c.key), c, first + i) for i, c in enumerate(_fixed(cfg))]
+    ids = {p.candidate.name: p.id for p in placements}
+    template = cfg.templates[0]
+
+    def say(place: str) -> str:
+        return template.format(object=carried_name, destination=_phrase(cfg, place))
+
+    others = [d for d in _goals(cfg)[carried_name] if d != destination.name]
+    return Design(
+        placements=tuple(placements),
+        target=ids[destination.name],
+        template=template,
+        instruction=libero.language(problem.name),
+        counterfactuals=tuple(Counterfactual(say(d), ids[d], (_phrase(cfg, destination.name), _phrase(cfg, d))) for d in others),
+        task=TaskSpec(program=cfg.task.program, params={"object": args[0]}),
+    )
+
+
+def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
+    """What a policy that learnt LIBERO-Goal's one layout instead of looking does with the trial's
+    task: it carries whatever stands where LIBERO stands that object to whatever stands where
+    LIBERO stands that place (the furniture's places never move). Like every shortcut it does not
+    read the instruction, so on LIBERO's own states it does the task and no swap."""
+    suite = worlds.world(cfg.world).suite
+    problem = libero.problem(suite, libero.tasks(suite)[0])
+    remembered = {problem.objects[i]: problem.centre(problem.region_of(i)) for i in problem.objects}
+    table = [o for o in spec.objects if o.kind in remembered]
+
+    def nearest(kind: str, besides: str = "") -> str:
+        x, y = remembered[kind]
+        return min((o for o in table if o.id != besides), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y)).id
+
+    named = spec.object(spec.target)
+    destination = nearest(named.kind) if named.kind in remembered else named.id
+    carried = nearest(spec.object(spec.task.params["object"]).kind, besides=destination)
+    return replace(spec, target=destination, task=replace(spec.task, params={**spec.task.params, "object": carried}))
