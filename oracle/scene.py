@@ -239,7 +239,9 @@ class Scene:
             kind = self.world.kind(kind_name)
             if kind.model == SITE:  # the fixture's site itself: where it is, the scene's positions read
                 site = m.site(kind.params["site"]).id
-                self.bodies[kind_name] = [Body(kind, int(m.site_bodyid[site]), -1, (), np.zeros(7), (), site)]
+                body_id = int(m.site_bodyid[site])
+                geoms = tuple(g for g in range(m.ngeom) if _descends(m, m.geom_bodyid[g], body_id))
+                self.bodies[kind_name] = [Body(kind, body_id, -1, geoms, np.zeros(7), (), site)]
                 continue
             for i in range(count):
                 name = self.world.body_name(kind_name, i)

@@ -2,8 +2,8 @@
 libero_spatial.yaml).
 
 A scene is a pair of places (any two whose words mention nothing in common and that stand
-`min_gap` apart) with an identical bowl in each, and the named one is either, equally often per
-pair; the plate, the cookie box and the ramekin stand in their LIBERO places in every scene. The
+`min_gap` apart) with an identical bowl in each: every place is the named one equally often, and
+the other place is drawn evenly among those it can share a scene with; the plate, the cookie box and the ramekin stand in their LIBERO places in every scene. The
 swap names the other bowl by its own place. Only the two bowls are alternatives.
 """
 
@@ -96,9 +96,14 @@ def _say(template: str, place: _Place) -> str:
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
-    a, b = balance.pick("pair", [(a.region, b.region) for a, b in _pairs(cfg)])
-    first, second = (next(p for p in _places(cfg) if p.region == r) for r in (a, b))
-    named, other = balance.pick(("named", a, b), [(first, second), (second, first)], also="named")
+    partners: dict[str, list[str]] = {}
+    for a, b in _pairs(cfg):
+        partners.setdefault(a.region, []).append(b.region)
+        partners.setdefault(b.region, []).append(a.region)
+    at = {p.region: p for p in _places(cfg)}
+    named = at[balance.pick("named", list(partners))]
+    other = at[balance.pick(("other", named.region), partners[named.region], also="present")]
+    first, second = sorted((named, other), key=_slot)  # ids by place, not by role
     template = balance.pick("template", cfg.templates)
     ids = {first.region: "bowl_a", second.region: "bowl_b"}
     bowls = tuple(Placement(ids[p.region], _standing(cfg, p), _slot(p)) for p in (first, second))

@@ -25,7 +25,7 @@ from gen.cli import UserError, main  # noqa: E402
 
 @dataclass
 class SideBySideOptions:
-    world: str = "libero_object"  # a LIBERO world: libero_object or libero_spatial
+    world: str = "libero_object"  # a LIBERO world: libero_object, libero_spatial or libero_goal
     task: int = 0  # the suite's task (0..9)
     state: int = 0  # its initial state (0..49)
     out: str | None = None  # default docs/<world>_side_by_side.png
