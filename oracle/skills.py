@@ -154,19 +154,18 @@ class Skills:
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
         over = self.top_of(destination_id)
-        if self._kind(self.held[0]).rim:  # held off-centre: the hand goes where the object's centre comes over the destination
+        rim = self._kind(self.held[0]).rim > 0  # a bowl, held by its wall, hanging off-centre
+        if rim:  # the hand goes where the bowl's centre comes over the destination
             over[:2] -= self.scene.object_pos(self.held[0])[:2] - self.scene.ee_pos()[:2]
         release_z = contact.release_point(
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
-        if self._kind(self.held[0]).rim:  # up first: a joint-space path could swing a hanging bowl into furniture
+        if rim:  # up first: a joint-space path could swing a hanging bowl into furniture
             self.move_to([*self.scene.ee_pos()[:2], carry_z])
         self.move_to([over[0], over[1], carry_z])
-        if self._kind(self.held[0]).rim:
-            self.move_linear([over[0], over[1], release_z])
-        else:
-            self.move_to([over[0], over[1], release_z])
+        lower = self.move_linear if rim else self.move_to
+        lower([over[0], over[1], release_z])
         self.open()
         self.move_to([over[0], over[1], release_z + 0.1])
 
