@@ -68,7 +68,9 @@ def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
     check_output(out, options.overwrite)
     types = [r for r in referents.of_world(world.name) if referents.load(r).code.canonical is not None]
     if not types:
-        raise UserError(f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}")
+        raise UserError(
+            f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}"
+        )
     return world, referents.load(types[0]), out
 
 
@@ -94,7 +96,9 @@ def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, s
         kind = world.kind(p.candidate.kind)
         x, y, *_ = referent.config.layout.slots[p.slot]
         z = kind.rest_z(referent.config.layout.surface(p.slot, world.surface_z))
-        objects.append(SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, (x, y, z), attributes=dict(p.candidate.attributes)))
+        objects.append(
+            SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, (x, y, z), attributes=dict(p.candidate.attributes))
+        )
     return EpisodeSpec(
         referent=referent.name,
         index=index,

@@ -55,7 +55,9 @@ class GenConfig:
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     # native (joint targets, 16-d state) | libero (OSC end-effector deltas, LIBERO's features); default: the world's
     profile: Optional[str] = None
-    world: Optional[str] = None  # native | libero_object | libero_spatial | libero_goal (LIBERO's scenes); default: the referent's
+    world: Optional[str] = (
+        None  # native | libero_object | libero_spatial | libero_goal (LIBERO's scenes); default: the referent's
+    )
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""

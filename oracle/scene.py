@@ -106,7 +106,11 @@ def _fixture(placed: worlds.Placed) -> rs_objects.MujocoObject:
     from core.worlds import libero
 
     fixture = rs_objects.MujocoXMLObject(
-        str(libero.assets_root() / placed.fixture.xml), name=placed.name, joints=None, obj_type="all", duplicate_collision_geoms=False
+        str(libero.assets_root() / placed.fixture.xml),
+        name=placed.name,
+        joints=None,
+        obj_type="all",
+        duplicate_collision_geoms=False,
     )
     body = fixture.get_obj()
     body.set("pos", " ".join(map(str, placed.pos)))

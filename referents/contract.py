@@ -63,7 +63,9 @@ class TypeModule:
     assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
     validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
     shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical  # what `position` demonstrates
-    canonical: Callable[[ReferentConfig, Problem], Design | None] | None = None  # a LIBERO task's own scene (gen.canonical), None for a task it cannot do
+    canonical: Callable[[ReferentConfig, Problem], Design | None] | None = (
+        None  # a LIBERO task's own scene (gen.canonical), None for a task it cannot do
+    )
     CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
 
     def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:

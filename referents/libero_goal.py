@@ -118,7 +118,11 @@ def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Can
     world = worlds.world(cfg.world)
     kind = problem.objects.get(name)
     return next(
-        (c for c in cfg.role("destination") + cfg.role("object") if c.kind == kind or world.kind(c.kind).params.get("site") == name),
+        (
+            c
+            for c in cfg.role("destination") + cfg.role("object")
+            if c.kind == kind or world.kind(c.kind).params.get("site") == name
+        ),
         None,
     )
 

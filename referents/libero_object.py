@@ -81,7 +81,9 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
         target=target,
         template=template,
         instruction=libero.language(problem.name),
-        counterfactuals=tuple(Counterfactual(say(name=p.candidate.name), p.id, (names[target].name, p.candidate.name)) for p in others),
+        counterfactuals=tuple(
+            Counterfactual(say(name=p.candidate.name), p.id, (names[target].name, p.candidate.name)) for p in others
+        ),
         task=TaskSpec(program=cfg.task.program, params={"destination": destination}),
     )
 

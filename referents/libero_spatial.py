@@ -3,8 +3,9 @@ libero_spatial.yaml).
 
 A scene is a pair of places (any two whose words mention nothing in common and that stand
 `min_gap` apart) with an identical bowl in each: every place is the named one equally often, and
-the other place is drawn evenly among those it can share a scene with; the plate, the cookie box and the ramekin stand in their LIBERO places in every scene. The
-swap names the other bowl by its own place. Only the two bowls are alternatives.
+the other place is drawn evenly among those it can share a scene with; the plate, the cookie box
+and the ramekin stand in their LIBERO places in every scene. The swap names the other bowl by its
+own place. Only the two bowls are alternatives.
 """
 
 from __future__ import annotations
@@ -163,7 +164,9 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
         target=target,
         template=template,
         instruction=libero.language(problem.name),
-        counterfactuals=(Counterfactual(_say(template, at[where[other]]), other, (at[where[target]].says, at[where[other]].says)),),
+        counterfactuals=(
+            Counterfactual(_say(template, at[where[other]]), other, (at[where[target]].says, at[where[other]].says)),
+        ),
         task=TaskSpec(program=cfg.task.program, params={"destination": problem.goal[0][2]}),
     )
 

@@ -268,7 +268,11 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
         canonical = {str(k): int(v) for k, v in canonical.items()} if isinstance(canonical, dict) else int(canonical)
         layout = Layout(slots, jitter, yaw, canonical)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise fail("layout", "slots must be [x, y] (or [x, y, the height of what the object stands on]), jitter a number (or one per slot), yaw [min, max]") from None
+        raise fail(
+            "layout",
+            "slots must be [x, y] (or [x, y, the height of what the object stands on]), "
+            "jitter a number (or one per slot), yaw [min, max]",
+        ) from None
     x0, x1, y0, y1 = world.reach
     for i, (x, y, *_) in enumerate(layout.slots):
         if not (x0 <= x <= x1 and y0 <= y <= y1):

@@ -14,7 +14,6 @@ from gen.config import parse
 from gen.run import generate
 from oracle.scene import Scene
 
-
 ROOT = Path(__file__).resolve().parent.parent
 LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
 

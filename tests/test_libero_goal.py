@@ -59,7 +59,11 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
     ours = model_arrays(scene_for(ASSETS, "libero", SUITE).model)
     skipped = ("mount0_base", "frontview", "birdview", "sideview", "galleryview", "robotview", "canonical_agentview")
     fixtures = ("wooden_cabinet_1_main", "flat_stove_1_main", "wine_rack_1_main")
-    compared = [k for k in theirs if not k.endswith(skipped) and not (k.startswith(("body_pos", "body_quat", "body_ipos")) and k.endswith(fixtures))]
+    compared = [
+        k
+        for k in theirs
+        if not k.endswith(skipped) and not (k.startswith(("body_pos", "body_quat", "body_ipos")) and k.endswith(fixtures))
+    ]
     named = {k: k.replace(":mount0_", ":fixed_mount0_") for k in compared}
     missing = [k for k in compared if named[k] not in ours]
     assert not missing, f"LIBERO's scene has what ours does not: {missing[:5]}"
@@ -73,11 +77,16 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
     drew them: both cameras within 4/255 mean absolute difference; every object within 1 mm."""
     size = LIBERO.image_size
     cases = [[t, s] for t in range(10) for s in range(5)]
-    theirs = np.load(liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True)
+    theirs = np.load(
+        liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True
+    )
     scene = scene_for(ASSETS, "libero", SUITE)
     cameras = Cameras(scene, size, LIBERO.camera_names)
     m, worst, farthest = scene.model, dict.fromkeys(LIBERO.cameras, 0.0), 0.0
-    kept = {f.name: (m.body_pos[m.body(f"{f.name}_main").id].copy(), m.body_quat[m.body(f"{f.name}_main").id].copy()) for f in world.fixtures}
+    kept = {
+        f.name: (m.body_pos[m.body(f"{f.name}_main").id].copy(), m.body_quat[m.body(f"{f.name}_main").id].copy())
+        for f in world.fixtures
+    }
     try:
         for t, s in cases:
             for name, *pose in theirs[f"{t}-{s}-fixtures"].tolist():
@@ -118,7 +127,9 @@ def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path,
         rows = reader.data[reader.data.episode_index == record.episode_index]
         episodes.append(
             {
-                "objects": [{k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites],
+                "objects": [
+                    {k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites
+                ],
                 "target": instance[spec["task"]["params"]["object"]],
                 "container": instance[record.target],
                 "arm": scene["robot"]["arm"],
@@ -127,7 +138,9 @@ def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path,
             }
         )
     fixtures = [[f.name, *f.pos, *yaw_quat(f.yaw)] for f in world.fixtures]
-    results = json.loads(liberos_own("replay", {"suite": SUITE, "fixtures": fixtures, "episodes": episodes}, tmp_path / "replay.json").read_text())
+    results = json.loads(
+        liberos_own("replay", {"suite": SUITE, "fixtures": fixtures, "episodes": episodes}, tmp_path / "replay.json").read_text()
+    )
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
     assert len(results) == 20 and succeeded >= GOAL_REPLAYS, f"LIBERO's check_success() accepted {succeeded}/20"
@@ -170,5 +183,7 @@ def test_on_displaced_objects_the_remembered_layout_fails(tmp_path: Path) -> Non
     mostly carries the wrong thing or to the wrong place."""
     root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=12", "split=exam", "image_size=32", "seed=3")
     exam = read(root)
-    report, _ = take(exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    report, _ = take(
+        exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False
+    )
     assert report["faces"]["task"]["rate"] <= 0.4, report["faces"]["task"]

@@ -65,7 +65,11 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Ref
     # the cameras no recorded frame comes from are left out
     skipped = ("mount0_base", "frontview", "birdview", "sideview", "galleryview", "robotview", "canonical_agentview")
     fixtures = ("wooden_cabinet_1_main", "flat_stove_1_main")
-    compared = [k for k in theirs if not k.endswith(skipped) and not (k.startswith(("body_pos", "body_quat", "body_ipos")) and k.endswith(fixtures))]
+    compared = [
+        k
+        for k in theirs
+        if not k.endswith(skipped) and not (k.startswith(("body_pos", "body_quat", "body_ipos")) and k.endswith(fixtures))
+    ]
     named = {k: k.replace(":mount0_", ":fixed_mount0_") for k in compared}
     missing = [k for k in compared if named[k] not in ours]
     assert not missing, f"LIBERO's scene has what ours does not: {missing[:5]}"
@@ -82,7 +86,9 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     degrees) at most 4/255 mean absolute difference per camera; every object within 1 mm."""
     size = LIBERO.image_size
     cases = [[t, s] for t in range(10) for s in range(5)]
-    theirs = np.load(liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True)
+    theirs = np.load(
+        liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True
+    )
     sim = default_sim(referent)
     scene = scene_for(referent.assets(), sim.profile, SUITE)
     cameras = Cameras(scene, size, LIBERO.camera_names)
@@ -163,10 +169,11 @@ def test_a_libero_spatial_dataset_loads_and_the_audit_finds_no_leak(spatial_data
 
 
 def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
-    """All 500 initial states load; on the first state of each task the oracle completes the task
-    (but the top drawer's: no drawer skill) and obeys the swap, while the shortcut LIBERO's layouts reward (`position`) completes the task
-    rows and obeys the swaps only where two of LIBERO's tasks share a layout (the stove and
-    cabinet bowls: tasks 7 and 9), going to the remembered bowl; `nothing` scores 0 everywhere."""
+    """All 500 initial states load; on the first state of each task the oracle completes at least
+    8 task rows of 10 (README) and obeys the swaps, while the shortcut LIBERO's layouts reward
+    (`position`) completes the task rows and obeys the swaps only where two of LIBERO's tasks share
+    a layout (the stove and cabinet bowls: tasks 7 and 9), going to the remembered bowl; `nothing`
+    scores 0 everywhere."""
     build(CanonicalOptions(world=SUITE, states=50, image_size=32, out=str(tmp_path / "all")))
     assert read(tmp_path / "all").meta["trials"] == 500
     build(CanonicalOptions(world=SUITE, states=1, image_size=32, out=str(tmp_path / "canonical")))
@@ -177,7 +184,7 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
         report, _ = take(exam, rows, make(policy), tmp_path / policy, workers=2, policy_name=policy, baseline=False)
         faces[policy] = report["faces"]
     oracle, position, nothing = faces["oracle"], faces["position"], faces["nothing"]
-    assert oracle["task"]["k"] >= 8 and oracle["obeyed_name"]["rate"] >= 0.9  # not the top drawer's bowl (README)
+    assert oracle["task"]["k"] >= 8 and oracle["obeyed_name"]["rate"] >= 0.9
     assert position["task"]["k"] >= 7 and position["obeyed_name"]["rate"] <= 0.2
     assert all(f["k"] == 0 for f in nothing.values())
 
@@ -185,6 +192,8 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
     root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=6", "split=exam", "image_size=32", "seed=2")
     exam = read(root)
-    report, _ = take(exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    report, _ = take(
+        exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False
+    )
     obeyed = report["faces"]["obeyed_name"]
     assert obeyed["chance"] == 0.5 and obeyed["ci"][0] <= 0.5 <= obeyed["ci"][1]

@@ -91,7 +91,15 @@ KINDS: dict[str, Kind] = {
         _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
         _on_fixture("cabinet_top", "wooden_cabinet_1_top_side", (0.12534, 0.09438, 0.00147), 0.0015, 0.09),
         # LIBERO-Goal's bottle (turbosquid_objects), standing
-        Kind("wine_bottle", "libero", (0.0426, 0.0442, 0.1569), -0.0011, "x", params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"}, quat=FLAT),
+        Kind(
+            "wine_bottle",
+            "libero",
+            (0.0426, 0.0442, 0.1569),
+            -0.0011,
+            "x",
+            params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"},
+            quat=FLAT,
+        ),
     )
 }
 
@@ -170,7 +178,12 @@ def joints(problem: Problem) -> list[tuple[str, int, int]]:
     """(joint, qpos width, qvel width) of a problem's model, in its order: the robot's, one free
     joint per object in the order of :objects, then the fixtures' inner joints (LIBERO compiles
     its objects, then its fixtures, in that order)."""
-    fixtures = [(f"{instance}_{j}", 1, 1) for instance, kind in problem.fixtures.items() if kind in FIXTURES for j in FIXTURES[kind].joints]
+    fixtures = [
+        (f"{instance}_{j}", 1, 1)
+        for instance, kind in problem.fixtures.items()
+        if kind in FIXTURES
+        for j in FIXTURES[kind].joints
+    ]
     return [(j, 1, 1) for j in ROBOT_JOINTS] + [(f"{instance}_joint0", 7, 6) for instance in problem.objects] + fixtures
 
 
