@@ -13,13 +13,13 @@ from dataclasses import replace
 import numpy as np
 
 from core import worlds
-from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from core.worlds import libero
 from referents.balance import Balance
 from referents.compose import slug
 from referents.design import Design, Placement
 from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
+from referents.goal import demo as demo  # the goal referent's plan: carry params.object to the target
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
@@ -87,12 +87,6 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
         counterfactuals=(Counterfactual(say(other), ids[other], (_phrase(cfg, goal), _phrase(cfg, other))),),
         task=TaskSpec(program=cfg.task.program, params={"object": ids[carried.name]}),
     )
-
-
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.grasp(spec.task.params["object"])
-    skills.lift(0.1)
-    skills.place(spec.target)
 
 
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:

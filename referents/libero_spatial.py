@@ -17,12 +17,12 @@ from itertools import combinations
 import numpy as np
 
 from core import worlds
-from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from core.worlds import libero
 from referents.balance import Balance
 from referents.design import Design, Placement
 from referents.features import POSITION, Alternative, Feature, object_alternatives
+from referents.libero_object import demo as demo  # LIBERO's plan: the target onto params.destination
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
@@ -117,12 +117,6 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
         counterfactuals=(Counterfactual(_say(template, other), ids[other.region], (named.says, other.says)),),
         task=replaced(cfg.task, params={**cfg.task.params, "destination": destination.id}),
     )
-
-
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.grasp(spec.target)
-    skills.lift(0.1)
-    skills.place(spec.task.params["destination"])
 
 
 def _place_of(cfg: ReferentConfig, obj: SceneObject) -> _Place:

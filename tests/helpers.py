@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from core.layout import NATIVE
+from core.worlds import World
 from gen.config import parse
 from gen.run import generate
 from oracle.scene import Scene
@@ -30,6 +31,41 @@ def liberos_own(command: str, request: dict, out: Path) -> Path:
     )
     assert done.returncode == 0, done.stderr[-3000:]
     return out
+
+
+def liberos_replay(dataset: Path, world: World) -> dict:
+    """A dataset's episodes as scripts/libero_reference.py's `replay` takes them, rebuilt from
+    their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
+    joints and recorded actions; `target` is what moves and `container` where it goes. A world
+    with fixtures replays in its suite's own scene, the fixtures where the world stands them."""
+    from core.layout import ACTION_KEY
+    from core.spec import yaw_quat
+    from gen import scenes
+    from gen.lerobot_reader import LeRobotReader
+
+    reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.model == "site"}
+    episodes = []
+    for record in scenes.read(dataset).itertuples():
+        scene, params = json.loads(record.scene), json.loads(record.spec)["task"]["params"]
+        instance = {o["id"]: sites.get(o["kind"], o["instance"]) for o in scene["objects"]}
+        moved, goal = (params["object"], record.target) if "object" in params else (record.target, params["destination"])
+        rows = reader.data[reader.data.episode_index == record.episode_index]
+        episodes.append(
+            {
+                "objects": [
+                    {k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites
+                ],
+                "target": instance[moved],
+                "container": instance[goal],
+                "arm": scene["robot"]["arm"],
+                "fingers": scene["robot"]["fingers"],
+                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
+            }
+        )
+    if not world.fixtures:
+        return {"episodes": episodes}
+    fixtures = [[f.name, *f.pos, *yaw_quat(f.yaw)] for f in world.fixtures]
+    return {"suite": world.suite, "fixtures": fixtures, "episodes": episodes}
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:

@@ -16,16 +16,15 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL c
 import referents
 from core import worlds
 from core.exam import read
-from core.layout import ACTION_KEY, LIBERO
-from core.spec import EpisodeSpec, SceneObject, yaw_quat
+from core.layout import LIBERO
+from core.spec import EpisodeSpec, SceneObject
 from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, covered
-from gen.lerobot_reader import LeRobotReader
 from gen.plan import world_sim
-from helpers import liberos_own, make_dataset
+from helpers import liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -119,28 +118,7 @@ def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path,
     """Each episode rebuilt in LIBERO-Goal's own scene from its record (the places on furniture are
     LIBERO's sites, not bodies), its recorded actions stepped there: LIBERO's own check_success()
     (`On(<object>, <place>)`, a site's or an object's) accepts them."""
-    reader, sites = LeRobotReader(goal_dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.model == "site"}
-    episodes = []
-    for record in scenes.read(goal_dataset).itertuples():
-        scene, spec = json.loads(record.scene), json.loads(record.spec)
-        instance = {o["id"]: sites.get(o["kind"], o["instance"]) for o in scene["objects"]}
-        rows = reader.data[reader.data.episode_index == record.episode_index]
-        episodes.append(
-            {
-                "objects": [
-                    {k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites
-                ],
-                "target": instance[spec["task"]["params"]["object"]],
-                "container": instance[record.target],
-                "arm": scene["robot"]["arm"],
-                "fingers": scene["robot"]["fingers"],
-                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
-            }
-        )
-    fixtures = [[f.name, *f.pos, *yaw_quat(f.yaw)] for f in world.fixtures]
-    results = json.loads(
-        liberos_own("replay", {"suite": SUITE, "fixtures": fixtures, "episodes": episodes}, tmp_path / "replay.json").read_text()
-    )
+    results = json.loads(liberos_own("replay", liberos_replay(goal_dataset, world), tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
     assert len(results) == 20 and succeeded >= GOAL_REPLAYS, f"LIBERO's check_success() accepted {succeeded}/20"

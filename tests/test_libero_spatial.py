@@ -23,9 +23,8 @@ from eval.battery import take
 from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
-from gen.lerobot_reader import LeRobotReader
 from gen.plan import default_sim
-from helpers import liberos_own, make_dataset
+from helpers import liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -126,27 +125,7 @@ def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Pa
     stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts them: 17/20 when this
     was written, the misses all bowls on the stove, which rest 3 mm lower under the reference's
     MuJoCo 3.17 than under our 3.9 (README); the bound leaves two for another host's floating point."""
-    reader = LeRobotReader(spatial_dataset)
-    episodes = []
-    for record in scenes.read(spatial_dataset).itertuples():
-        scene, spec = json.loads(record.scene), json.loads(record.spec)
-        instance = {o["id"]: o["instance"] for o in scene["objects"]}
-        rows = reader.data[reader.data.episode_index == record.episode_index]
-        episodes.append(
-            {
-                "objects": [{k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"]],
-                "target": instance[record.target],
-                "container": instance[spec["task"]["params"]["destination"]],
-                "arm": scene["robot"]["arm"],
-                "fingers": scene["robot"]["fingers"],
-                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
-            }
-        )
-    from core.spec import yaw_quat
-
-    fixtures = [[f.name, *f.pos, *yaw_quat(f.yaw)] for f in world.fixtures]
-    request = {"suite": SUITE, "fixtures": fixtures, "episodes": episodes}
-    results = json.loads(liberos_own("replay", request, tmp_path / "replay.json").read_text())
+    results = json.loads(liberos_own("replay", liberos_replay(spatial_dataset, world), tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
     assert len(results) == 20 and succeeded >= 15, f"LIBERO's check_success() accepted {succeeded}/20"

@@ -24,9 +24,8 @@ from eval.battery import take
 from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
-from gen.lerobot_reader import LeRobotReader
 from gen.plan import default_sim
-from helpers import liberos_own, make_dataset
+from helpers import liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
 
@@ -105,23 +104,9 @@ def test_recorded_actions_succeed_in_liberos_own_environment(libero_dataset: Pat
     """Each episode rebuilt in LIBERO's environment from its scene record alone (LIBERO's
     instance names, poses, robot joints), its recorded 7-d actions stepped there: LIBERO's own
     check_success() accepts at least 90%."""
-    reader = LeRobotReader(libero_dataset)
-    episodes = []
-    for record in scenes.read(libero_dataset).itertuples():
-        scene, spec = json.loads(record.scene), json.loads(record.spec)
-        instance = {o["id"]: o["instance"] for o in scene["objects"]}
-        rows = reader.data[reader.data.episode_index == record.episode_index]
-        episodes.append(
-            {
-                "objects": [{k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"]],
-                "target": instance[record.target],
-                "container": instance[spec["task"]["params"]["destination"]],
-                "arm": scene["robot"]["arm"],
-                "fingers": scene["robot"]["fingers"],
-                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
-            }
-        )
-    results = json.loads(liberos_own("replay", {"episodes": episodes}, tmp_path / "replay.json").read_text())
+    results = json.loads(
+        liberos_own("replay", liberos_replay(libero_dataset, worlds.world(SUITE)), tmp_path / "replay.json").read_text()
+    )
     succeeded = sum(r["success"] for r in results)
     assert len(results) == 20 and succeeded >= 18, f"LIBERO's check_success() accepted {succeeded}/20"
 
