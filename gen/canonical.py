@@ -1,4 +1,4 @@
-"""`python -m gen.canonical world=libero_object` (or libero_spatial): an exam on LIBERO's own initial states.
+"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal): an exam on LIBERO's own initial states.
 
 Its task rows are exactly a LIBERO suite's tasks: LIBERO's initial states (every one of the 50
 per task, or `states=` of them drawn with `seed=`), LIBERO's instructions, the rollout horizon
