@@ -343,6 +343,17 @@ class Scene:
         body = self.placed[object_id]
         return (self.data.site_xpos[body.site] if body.site >= 0 else self.data.xpos[body.body_id]).copy()
 
+    def surface_below(self, xy: np.ndarray, z: float) -> float:
+        """Height of the first surface straight below (x, y, z) that is not the robot's: where a
+        fingertip lowered there would land (-inf over nothing)."""
+        m, geom, down = self.model, np.zeros(1, np.int32), np.array([0.0, 0.0, -1.0])
+        while (distance := mujoco.mj_ray(m, self.data, np.array([xy[0], xy[1], z], float), down, None, 1, -1, geom)) >= 0:
+            z -= distance
+            if m.body_rootid[m.geom_bodyid[geom[0]]] != m.body_rootid[self.hand]:
+                return z
+            z -= 1e-4  # through the robot's geom, on down
+        return -np.inf
+
     def positions(self) -> dict[str, tuple[float, float, float]]:
         """Where every object of the episode is now."""
         return {k: tuple(float(v) for v in self.object_pos(k)) for k in self.placed}  # type: ignore[misc]

@@ -25,6 +25,11 @@ OPEN, CLOSED = -1.0, 1.0
 # closes or opens the hand settles on its goal.
 DELTA_GAIN = 3.0
 SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control steps
+# robosuite's Panda gripper, open (measured): each finger spans this far from the grip site along
+# the closing axis and this far across it, its tip this far below the grip site.
+FINGER_REACH, FINGER_HALF_WIDTH, FINGER_TIP = (0.039, 0.066), 0.011, 0.0095
+FINGER_MARGIN = 0.005  # how far above whatever stands beside a bowl the outer fingertip stays
+RIM_SIDES = np.radians([0.0, 30.0, -30.0, 60.0, -60.0])  # where on a bowl's wall to grasp, from the robot-facing side
 
 
 def rotation_vector(rot: np.ndarray) -> np.ndarray:
@@ -132,10 +137,9 @@ class Skills:
         top = contact.top(kind, pos)
         point = contact.grasp_point(kind, pos)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
-        if kind.rim:  # fingers across the wall on the side facing the robot's base, closing along its radius
-            toward = np.subtract(self.scene.world.robot_base[:2], pos[:2])
-            axis = float(np.arctan2(toward[1], toward[0]))
-            point[:2] = top[:2] = pos[:2] + kind.rim * toward / np.linalg.norm(toward)
+        if kind.rim:  # fingers across the wall, closing along its radius
+            axis = self._rim_side(kind, pos, top[2])
+            point[:2] = top[:2] = pos[:2] + kind.rim * np.array([np.cos(axis), np.sin(axis)])
         yaw = grasp_yaw(axis)
         self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
         if kind.rim:  # straight down onto the wall: a joint-space path could sweep a finger through the bowl
@@ -144,6 +148,22 @@ class Skills:
             self.move_to(point, yaw)
         self.close()
         self.held = (object_id, contact.grip_height(kind))
+
+    def _rim_side(self, kind: catalog.Kind, pos: np.ndarray, top: float) -> float:
+        """Which side of a bowl's wall to grasp (the direction from its centre): the first, from
+        the one facing the robot's base, under whose outer finger nothing (a neighbour, a stove)
+        stands higher than the fingertip comes at the grasp depth; if none is clear (a bowl in a
+        drawer), the facing side."""
+        toward = np.subtract(self.scene.world.robot_base[:2], pos[:2])
+        facing = float(np.arctan2(toward[1], toward[0]))
+        above, lowest = self.clearance(), top - kind.grasp_depth() - FINGER_TIP - FINGER_MARGIN
+        for side in facing + RIM_SIDES:
+            radial, across = np.array([np.cos(side), np.sin(side)]), np.array([-np.sin(side), np.cos(side)])
+            widths = (-FINGER_HALF_WIDTH, 0.0, FINGER_HALF_WIDTH)
+            under = (pos[:2] + (kind.rim + r) * radial + w * across for r in FINGER_REACH for w in widths)
+            if all(self.scene.surface_below(xy, above) < lowest for xy in under):
+                return float(side)
+        return facing
 
     def lift(self, height: float = 0.15) -> None:
         self.move_to(self.scene.ee_pos() + [0.0, 0.0, height])

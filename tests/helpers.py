@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 from pathlib import Path
 
@@ -17,6 +18,9 @@ from oracle.scene import Scene
 
 ROOT = Path(__file__).resolve().parent.parent
 LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
+# LIBERO's initial states per task the picture tests compare (each a render in LIBERO's env and in
+# ours): 2 in `make test`; the README's figures, over the first 5, with LIBERO_PICTURE_STATES=5.
+PICTURE_STATES = int(os.environ.get("LIBERO_PICTURE_STATES", "2"))
 
 
 def liberos_own(command: str, request: dict, out: Path) -> Path:

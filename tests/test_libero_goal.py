@@ -14,7 +14,7 @@ import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
 
 import referents
-from core import worlds
+from core import contact, worlds
 from core.exam import read
 from core.layout import LIBERO
 from core.spec import EpisodeSpec, SceneObject
@@ -23,13 +23,15 @@ from eval.battery import take
 from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, covered
-from gen.plan import world_sim
-from helpers import liberos_own, liberos_replay, make_dataset
+from gen.plan import default_sim, plan, world_sim
+from helpers import PICTURE_STATES, liberos_own, liberos_replay, make_dataset
+from oracle.episode import demonstrate
+from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
 SUITE = "libero_goal"
-GOAL_REPLAYS = 18  # of 20 (20 when this was written, README): two left for another host's floating point
+GOAL_REPLAYS = 18  # of 20 (19 when this was written, README): two left for another host's floating point
 ASSETS = (("akita_black_bowl", 1), ("cream_cheese", 1), ("plate", 1), ("wine_bottle", 1))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
@@ -72,10 +74,10 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
 
 
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path, world: worlds.World) -> None:
-    """LIBERO-Goal's first 5 initial states of each of its 10 tasks, the fixtures posed as LIBERO
+    """LIBERO-Goal's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as LIBERO
     drew them: both cameras within 4/255 mean absolute difference; every object within 1 mm."""
     size = LIBERO.image_size
-    cases = [[t, s] for t in range(10) for s in range(5)]
+    cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
     theirs = np.load(
         liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True
     )
@@ -106,6 +108,24 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
     print(f"worst mean absolute difference per camera (of 255): {worst}; farthest object {farthest * 1000:.3f} mm")
     assert max(worst.values()) <= 4.0, f"mean absolute difference per camera (of 255): {worst}"
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
+
+
+def test_a_bowl_beside_the_stove_is_taken_from_a_side_clear_of_it(world: worlds.World) -> None:
+    """A bowl whose robot-facing side has the stove's burner under the outer finger: grasped
+    there, the finger lands on the burner and the bowl stays (all ten attempts failed so before
+    the oracle chose the side); taken from a side clear of it, the task is done."""
+    referent = referents.load(SUITE)
+    sim = default_sim(referent)
+    spec = plan(referent, 20, 1, sim)[2]
+    bowl = spec.object(spec.task.params["object"])
+    kind = world.kind(bowl.kind)
+    scene = scene_for(referent.assets(), sim.profile, SUITE)
+    scene.reset(spec)
+    toward = np.subtract(world.robot_base[:2], bowl.pos[:2])
+    outer_finger = np.asarray(bowl.pos[:2]) + (kind.rim + 0.05) * toward / np.linalg.norm(toward)
+    fingertip = contact.grasp_point(kind, np.asarray(bowl.pos))[2] - 0.01
+    assert scene.surface_below(outer_finger, 1.5) > fingertip, "the scene no longer has the stove beside the bowl"
+    assert demonstrate(scene, ArmIK(np.asarray(sim.robot_home), sim.world), spec, referent.demo).success
 
 
 @pytest.fixture(scope="module")

@@ -25,7 +25,7 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.plan import default_sim
-from helpers import liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
 
@@ -63,12 +63,12 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Ref
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     tmp_path: Path, world: worlds.World, referent: referents.Referent
 ) -> None:
-    """LIBERO-Object's first 5 initial states of each of its 10 tasks: our frames of both cameras
+    """LIBERO-Object's first initial states (PICTURE_STATES) of each of its 10 tasks: our frames of both cameras
     (stored mirrored, as the libero profile stores them) against LIBERO's own frames turned
     180 degrees (what lerobot's LiberoProcessorStep and openpi hand a policy): at most 4/255 mean
     absolute difference per camera; every object within 1 mm of where LIBERO puts it."""
     size = LIBERO.image_size
-    cases = [[t, s] for t in range(10) for s in range(5)]
+    cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
     request = {"suite": SUITE, "size": size, "cases": cases}
     theirs = np.load(liberos_own("render", request, tmp_path / "frames.npz"), allow_pickle=True)
     sim = default_sim(referent)
