@@ -157,9 +157,9 @@ class Skills:
         toward = np.subtract(self.scene.world.robot_base[:2], pos[:2])
         facing = float(np.arctan2(toward[1], toward[0]))
         above, lowest = self.clearance(), top - kind.grasp_depth() - FINGER_TIP - FINGER_MARGIN
+        widths = (-FINGER_HALF_WIDTH, 0.0, FINGER_HALF_WIDTH)
         for side in facing + RIM_SIDES:
             radial, across = np.array([np.cos(side), np.sin(side)]), np.array([-np.sin(side), np.cos(side)])
-            widths = (-FINGER_HALF_WIDTH, 0.0, FINGER_HALF_WIDTH)
             under = (pos[:2] + (kind.rim + r) * radial + w * across for r in FINGER_REACH for w in widths)
             if all(self.scene.surface_below(xy, above) < lowest for xy in under):
                 return float(side)
