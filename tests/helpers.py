@@ -37,6 +37,23 @@ def liberos_own(command: str, request: dict, out: Path) -> Path:
     return out
 
 
+def canonical_reports(out: Path, trials: dict[str, int], world: str = "libero_object") -> dict[str, dict]:
+    """A canonical exam of `world` on the first initial state of each task (gen.canonical), each
+    policy taken on its first `trials[policy]` trials: the policies' reports."""
+    from core.exam import read
+    from eval.battery import take
+    from eval.registry import make
+    from gen.canonical import CanonicalOptions, build
+
+    build(CanonicalOptions(world=world, states=1, image_size=32, out=str(out / "canonical")))
+    exam = read(out / "canonical")
+    reports = {}
+    for policy, n in trials.items():
+        rows = exam.trials[exam.trials["trial"] < n]
+        reports[policy], _ = take(exam, rows, make(policy), out / policy, workers=2, policy_name=policy, baseline=False)
+    return reports
+
+
 def liberos_replay(dataset: Path, world: World) -> dict:
     """A dataset's episodes as scripts/libero_reference.py's `replay` takes them, rebuilt from
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot

@@ -22,9 +22,9 @@ from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
 from gen import scenes
-from gen.canonical import CanonicalOptions, build, covered
+from gen.canonical import covered
 from gen.plan import default_sim, plan, world_sim
-from helpers import PICTURE_STATES, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.episode import demonstrate
 from oracle.ik import ArmIK
 from oracle.render import Cameras
@@ -164,13 +164,8 @@ def test_the_canonical_exam_is_liberos_covered_tasks(tmp_path: Path) -> None:
         "put the cream cheese in the bowl",
         "put the bowl on the plate",
     ]
-    build(CanonicalOptions(world=SUITE, states=1, image_size=32, out=str(tmp_path / "canonical")))
-    exam = read(tmp_path / "canonical")
-    faces = {}
-    for policy, trials in (("oracle", 4), ("position", 4), ("nothing", 1)):  # nothing runs every rollout to its horizon
-        rows = exam.trials[exam.trials["trial"] < trials]
-        report, _ = take(exam, rows, make(policy), tmp_path / policy, workers=2, policy_name=policy, baseline=False)
-        faces[policy] = report["faces"]
+    reports = canonical_reports(tmp_path, {"oracle": 4, "position": 4, "nothing": 1}, SUITE)  # nothing runs to the horizon
+    faces = {policy: report["faces"] for policy, report in reports.items()}
     assert faces["oracle"]["task"]["k"] >= 3 and faces["oracle"]["obeyed_name"]["rate"] >= 0.7
     assert faces["position"]["task"]["k"] >= 3 and faces["position"]["obeyed_name"]["k"] == 0  # it does the remembered task
     assert all(f["k"] == 0 for f in faces["nothing"].values())

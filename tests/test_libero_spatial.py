@@ -24,7 +24,7 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.plan import default_sim
-from helpers import PICTURE_STATES, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -155,14 +155,8 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
     scores 0 everywhere."""
     build(CanonicalOptions(world=SUITE, states=50, image_size=32, out=str(tmp_path / "all")))
     assert read(tmp_path / "all").meta["trials"] == 500
-    build(CanonicalOptions(world=SUITE, states=1, image_size=32, out=str(tmp_path / "canonical")))
-    exam = read(tmp_path / "canonical")
-    faces = {}
-    for policy, trials in (("oracle", 10), ("position", 10), ("nothing", 1)):  # nothing runs every rollout to its horizon
-        rows = exam.trials[exam.trials["trial"] < trials]
-        report, _ = take(exam, rows, make(policy), tmp_path / policy, workers=2, policy_name=policy, baseline=False)
-        faces[policy] = report["faces"]
-    oracle, position, nothing = faces["oracle"], faces["position"], faces["nothing"]
+    reports = canonical_reports(tmp_path, {"oracle": 10, "position": 10, "nothing": 1}, SUITE)  # nothing runs to the horizon
+    oracle, position, nothing = (reports[policy]["faces"] for policy in ("oracle", "position", "nothing"))
     assert oracle["task"]["k"] >= 9 and oracle["obeyed_name"]["rate"] >= 0.9
     assert position["task"]["k"] >= 7 and position["obeyed_name"]["rate"] <= 0.2
     assert all(f["k"] == 0 for f in nothing.values())

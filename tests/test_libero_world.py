@@ -25,7 +25,7 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.plan import default_sim
-from helpers import PICTURE_STATES, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
 
@@ -154,15 +154,9 @@ def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
     task and obeys no rename, going to the original target; `nothing` scores 0 everywhere."""
     build(CanonicalOptions(states=50, image_size=32, out=str(tmp_path / "all")))
     assert read(tmp_path / "all").meta["trials"] == 500
-    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical")))
-    exam = read(tmp_path / "canonical")
-    faces = {}
-    for policy, trials in (("oracle", 5), ("position", 5), ("nothing", 1)):  # nothing runs every rollout to its horizon
-        rows = exam.trials[exam.trials["trial"] < trials]
-        report, _ = take(exam, rows, make(policy), tmp_path / policy, workers=2, policy_name=policy, baseline=False)
-        faces[policy] = report["faces"]
-        assert report["init_value"]["trusted"]
-    oracle, position, nothing = faces["oracle"], faces["position"], faces["nothing"]
+    reports = canonical_reports(tmp_path, {"oracle": 5, "position": 5, "nothing": 1})  # nothing runs to the horizon
+    assert all(report["init_value"]["trusted"] for report in reports.values())
+    oracle, position, nothing = (reports[policy]["faces"] for policy in ("oracle", "position", "nothing"))
     assert oracle["task"]["rate"] == 1.0 and oracle["obeyed_name"]["rate"] >= 0.95
     assert position["task"]["rate"] >= 0.8 and position["obeyed_name"]["rate"] <= 0.05
     assert position["true_target"]["rate"] >= 0.8
