@@ -29,8 +29,10 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
   original_program (str), spec (JSON: the trial's full episode spec), scene_hash (str),
   alternatives (JSON: `[{"target", "program"}]`, the original first: what the instruction
   chooses among), slot (int: slot of the object asked for), value (str: what the instruction
-  calls it), initial_ee (list[float]: the end effector's position in the initial state, which a
-  log's step 0 must show).
+  calls it), initial_ee (list[float]: the end effector's position in the initial state),
+  settled_start (JSON: {"ee": [x, y, z], "objects": {id: [x, y, z]}} after the profile's settle
+  steps, where `reset()` of the gymnasium env leaves them). A log's step 0 must show one of the two:
+  the initial state (then the settle steps are logged as steps) or the settled start.
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
@@ -70,6 +72,7 @@ ANSWER_COLUMNS = (
     "row", "face", "variant", "target", "program", "original_target", "original_program", "spec", "scene_hash",
     "alternatives", "slot", "value", "initial_ee",
 )  # fmt: skip
+SETTLED = "settled_start"  # an answers column added within version 2: exams made before it lack it
 
 
 class ExamError(ValueError):
@@ -111,6 +114,7 @@ def trial_rows(
     initial_state: list[float],
     max_steps: int,
     initial_ee: list[float],
+    settled_start: dict[str, Any] | None = None,
 ) -> list[dict]:
     """The rollouts of one trial: task, a swap per alternative, occ, nonsense.
 
@@ -130,6 +134,7 @@ def trial_rows(
         "scene_hash": spec.scene_hash,
         "initial_state": initial_state,
         "initial_ee": initial_ee,
+        "settled_start": json.dumps(settled_start or {}),
         "max_steps": max_steps,
         "alternatives": json.dumps(alternatives),
     }
@@ -150,7 +155,7 @@ def trial_rows(
 def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
     for i, r in enumerate(rows):
         r["row"] = i
-    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, ANSWER_COLUMNS)):
+    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, (*ANSWER_COLUMNS, SETTLED))):
         pq.write_table(pa.Table.from_pylist([{c: r[c] for c in columns} for r in rows]), root / name)
     header = {
         "format": EXAM_FORMAT,
@@ -226,6 +231,8 @@ def read(root: Path | str) -> Exam:
         raise ExamError(f"{root}: {TRIALS_FILE} holds {len(trials)} rollouts, exam.json says {meta.get('rollouts')}")
     if sorted(trials["row"]) != sorted(answers["row"]) or trials["row"].duplicated().any():
         raise ExamError(f"{root}: {TRIALS_FILE} and {ANSWERS_FILE} do not hold the same rows once each")
+    if SETTLED not in answers.columns:
+        answers[SETTLED] = "{}"
     trials = trials.merge(answers, on="row")
     try:
         EpisodeSpec.from_json(trials["spec"].iloc[0])

@@ -159,9 +159,10 @@ class EpisodeSpec:
     def scene_record(self) -> dict[str, Any]:
         """The `scene` column of meta/scenes.parquet. Outside the native world every object also
         carries the world's own name for it (`instance`, e.g. LIBERO's `alphabet_soup_1`) and
-        its orientation (`quat`, w x y z), and the record names the world and the robot's
-        starting joints (`robot`: arm and finger joint positions, in the model's joint order),
-        so the episode can be rebuilt in the world's own simulator."""
+        its orientation (`quat`, w x y z), and the record names the world, its furniture
+        (`fixtures`: each one's world name, e.g. LIBERO's `flat_stove_1`, kind, body position and
+        orientation) and the robot's starting joints (`robot`: arm and finger joint positions, in
+        the model's joint order), so the episode can be rebuilt in the world's own simulator."""
         objects = [{**asdict(o), "pos": list(o.pos)} for o in self.objects]
         if self.sim.world == "native":
             return {"objects": objects}
@@ -171,9 +172,14 @@ class EpisodeSpec:
             record["instance"] = world.body_name(obj.kind, seen[obj.kind])
             record["quat"] = list(yaw_quat(obj.yaw, world.kind(obj.kind).quat))
         fingers = world.finger_home
+        fixtures = [
+            {"instance": f.name, "kind": f.fixture.kind, "pos": list(f.pos), "quat": list(yaw_quat(f.yaw))}
+            for f in world.fixtures
+        ]
         return {
             "world": world.name,
             "objects": objects,
+            "fixtures": fixtures,
             "robot": {"arm": list(self.sim.robot_home), "fingers": [fingers, -fingers]},
         }
 

@@ -5,7 +5,8 @@ python -m eval policy=oracle exam=datasets/object-exam workers=2
 Runs the exam's rollouts in our simulator with the policy (oracle, position, nothing, random,
 remote:HOST:PORT, ckpt:PATH or any other registered one: eval/registry.py), logs them to
 `rollouts.parquet`, scores the logs with eval/score.py and writes report.json, report.md and
-report.html to `out` (eval/battery.py).
+report.html to `out` (eval/battery.py). Every finished rollout is kept as it ends: an interrupted
+take continues with resume=true.
 """
 
 from __future__ import annotations
@@ -27,7 +28,9 @@ from gen.cli import Failed, UserError, main
 class EvalOptions:
     policy: str  # oracle, position, nothing, random, remote:HOST:PORT, ckpt:PATH (eval/registry.py)
     exam: str  # the exam folder (python -m gen ... split=exam)
-    out: str | None = None  # report folder; default runs/<exam folder>/<policy>
+    out: str | None = None  # report folder; default runs/<exam folder>-<exam digest>/<policy>
+    overwrite: bool = False  # replace the report at `out`, and discard an interrupted take's rollouts
+    resume: bool = False  # continue an interrupted take with the same options
     rows: int | None = None  # take only the first N rollouts; default all
     workers: int = 1  # processes running rollouts (the logs are the same either way)
     keys: str = "dataset"  # remote policies: dataset (the exam's keys) | libero (what openpi's LIBERO client sends)
@@ -35,12 +38,29 @@ class EvalOptions:
     device: str | None = None  # lerobot checkpoints: the torch device to run on (default cpu)
 
 
+def check_out(out: Path, overwrite: bool) -> None:
+    """Before the policy loads and any rollout runs: `out` must be a folder that can be written
+    (as must its parent, where the rollouts are kept), and hold no report unless `overwrite`."""
+    from eval.battery import REPORT_FILES
+    from gen.config import check_writable, listed
+
+    if out.exists() and not out.is_dir():
+        raise UserError(f"out={out} exists and is not a folder")
+    if not overwrite and (found := [name for name in REPORT_FILES if (out / name).exists()]):
+        raise UserError(
+            f"out={out} already holds a report ({listed(found)}); pass overwrite=true to replace it, or choose another out"
+        )
+    check_writable(out)
+    check_writable(out, inside=True)
+
+
 def evaluate(options: EvalOptions) -> None:
     if options.workers < 1:
         raise UserError(f"workers must be at least 1, got {options.workers}")
     if options.rows is not None and options.rows < 1:
         raise UserError(f"rows must be at least 1, got {options.rows}")
-    from eval.battery import take  # the simulator stack loads only for valid input
+    from eval.baseline import exam_digest
+    from eval.battery import kept_rollouts, take  # the simulator stack loads only for valid input
     from eval.rollout import ProfileMismatch
 
     if options.replan is not None and options.replan < 1:
@@ -56,19 +76,35 @@ def evaluate(options: EvalOptions) -> None:
             raise UserError(
                 f"keys=libero sends LIBERO's features; this exam is profile {exam.profile} (make it with profile=libero)"
             )
+        # the default report folder names the exam by its content too: two exams of one folder name never share it
+        named = f"{exam.root.resolve().name}-{exam_digest(exam)[:8]}"
+        out = Path(options.out or Path("runs") / named / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
+        check_out(out, options.overwrite)
         policy = make(options.policy, **policy_options)
     except (ExamError, PolicyError) as exc:
         raise UserError(str(exc)) from None
     rows = exam.trials if options.rows is None else exam.trials.head(options.rows)
-    out = Path(options.out or Path("runs") / exam.root.name / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
+    kept = len(kept_rollouts(out).saved()) if options.resume else 0
     try:
-        report, seconds = take(exam, rows, policy, out, options.workers, options.policy, policy_options=policy_options)
+        report, seconds = take(
+            exam,
+            rows,
+            policy,
+            out,
+            options.workers,
+            options.policy,
+            policy_options=policy_options,
+            resume=options.resume,
+            discard=options.overwrite,
+        )
     except (ProfileMismatch, FeatureMismatch) as exc:
         raise UserError(str(exc)) from None
     except OSError as exc:
         raise Failed(f"{type(exc).__name__}: {exc}") from None
-    faces = report["faces"]
-    print(f"{report['policy']} on {report['exam']}: {len(rows)} rollouts in {seconds:.0f} s ({60 * len(rows) / seconds:.1f}/min)")
+    faces, ran = report["faces"], len(rows) - kept
+    rate = f" ({60 * ran / seconds:.1f}/min)" if ran and seconds > 0 else ""
+    resumed = f", {kept} kept from the interrupted take" if kept else ""
+    print(f"{report['policy']} on {report['exam']}: {ran} rollouts in {seconds:.0f} s{rate}{resumed}")
     for face in ("task", "obeyed_name", "true_target", "occ", "nonsense"):
         if face in faces:
             f = faces[face]

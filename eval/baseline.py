@@ -22,11 +22,17 @@ SHORTCUT = "position"  # the reference policy whose rates are the shortcut basel
 REPORT_VERSION = 2  # of eval/score.py's report: a baseline scored by another version is not reused
 
 
-def _file(exam: Exam, rows: Sequence[int]) -> Path:
-    digest = hashlib.sha256(f"{__version__}/{REPORT_VERSION}/{sorted(int(r) for r in rows)}".encode())
+def exam_digest(exam: Exam, salt: str = "") -> str:
+    """sha256 of `salt` and the exam's files: what a result was measured on, whatever folder holds the exam."""
+    digest = hashlib.sha256(salt.encode())
     for name in ("exam.json", TRIALS_FILE, ANSWERS_FILE):
         digest.update((exam.root / name).read_bytes())
-    return cache_dir() / "baselines" / f"{digest.hexdigest()[:24]}.json"
+    return digest.hexdigest()
+
+
+def _file(exam: Exam, rows: Sequence[int]) -> Path:
+    key = exam_digest(exam, f"{__version__}/{REPORT_VERSION}/{sorted(int(r) for r in rows)}")
+    return cache_dir() / "baselines" / f"{key[:24]}.json"
 
 
 def cached_baseline(exam: Exam, rows: Sequence[int]) -> dict | None:

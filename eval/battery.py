@@ -4,12 +4,18 @@ The report is computed from the written `rollouts.parquet`, exactly as the offli
 (`python -m eval.score`) would, so a report never depends on how the rollouts were run. Every
 report carries the measured shortcut beside it: the `position` reference policy's faces on the
 same rollouts, run once per exam and kept in the cache (`shortcut_baseline`).
+
+A take runs for hours on a canonical exam, so every finished rollout is kept at once, one file
+each, in a partial run beside `out` (gen/partial.py, locked while a take works on it): an
+interrupted take loses only the rollouts in flight, and `resume` runs only the missing ones, to
+the same report. The reports reach `out` only when every rollout is done.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import multiprocessing
+import signal
 import tempfile
 import time
 from pathlib import Path
@@ -21,12 +27,17 @@ import pyarrow.parquet as pq
 from tqdm import tqdm
 
 from core.exam import Exam
-from eval.baseline import SHORTCUT, cached_baseline, store_baseline
+from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
 from eval.policies import Policy
 from eval.registry import make
 from eval.report import write_reports
 from eval.rollout import Runner, run_chunk
 from eval.score import POLICY_KEY, read_logs, score
+from gen.partial import Partial
+
+ROLLOUTS = "rollouts.parquet"
+REPORT_FILES = ("report.json", "report.md", "report.html", ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
+_IGNORE_SIGINT = (signal.SIGINT, signal.SIG_IGN)  # a pool worker's initializer: Ctrl-C is for the parent to handle
 
 
 def shortcut_baseline(exam: Exam, rows: pd.DataFrame, workers: int = 1) -> dict:
@@ -35,9 +46,14 @@ def shortcut_baseline(exam: Exam, rows: pd.DataFrame, workers: int = 1) -> dict:
     if known is not None:
         return known
     with tempfile.TemporaryDirectory() as tmp:
-        report, _ = take(exam, rows, make(SHORTCUT), Path(tmp), workers, SHORTCUT, baseline=False)
+        report, _ = take(exam, rows, make(SHORTCUT), Path(tmp) / SHORTCUT, workers, SHORTCUT, baseline=False)
     store_baseline(exam, list(rows["row"]), report["faces"])
     return report["faces"]
+
+
+def kept_rollouts(out: Path) -> Partial:
+    """Where a take to `out` keeps its finished rollouts: a partial run beside `out`."""
+    return Partial(out, "rollouts")
 
 
 def take(
@@ -49,35 +65,70 @@ def take(
     policy_name: str | None = None,
     baseline: bool = True,
     policy_options: dict | None = None,
+    resume: bool = False,
+    discard: bool = True,
 ) -> tuple[dict, float]:
     """Run `rows` (some or all of `exam.trials`) with `policy`, write rollouts.parquet and the
-    reports to `out`; returns the report and the seconds the rollouts took (the shortcut
+    reports to `out`; returns the report and the seconds the rollouts run now took (the shortcut
     baseline's, measured on first use with `baseline`, not included). With workers > 1
     and a `policy_name`, contiguous chunks of rows run in processes that each rebuild the policy
-    from its name and `policy_options` (eval/registry.py); the logs are the same either way."""
+    from its name and `policy_options` (eval/registry.py); the logs are the same either way.
+    An interrupted take's rollouts are continued with `resume`, discarded with `discard`, and
+    refused with neither; interrupting this one raises KeyboardInterrupt saying what was kept."""
     check = getattr(policy, "check", None)
     if check is not None:  # a checkpoint that cannot read this exam stops here, before any rollout
         check(exam.features)
-    start = time.perf_counter()
+    ids = [int(r) for r in rows["row"]]
+    run = {"exam": exam_digest(exam), "rows": ids, "policy": policy.name, "policy_name": policy_name, "options": policy_options}
+    with kept_rollouts(out) as partial:
+        partial.start(run, resume, discard)
+        try:
+            start = time.perf_counter()
+            _run(rows[~rows["row"].isin(partial.saved())], policy, partial, workers, policy_name, policy_options)
+            seconds = time.perf_counter() - start
+            report = _report(exam, rows, policy, [partial.load(i) for i in ids], partial.root / "report", workers, baseline)
+        except KeyboardInterrupt:
+            kept = len(partial.saved() & set(ids))
+            raise KeyboardInterrupt(
+                f"interrupted: {kept} of {len(ids)} rollouts kept in {partial.root}; rerun with resume=true to continue"
+            ) from None
+        out.mkdir(parents=True, exist_ok=True)
+        for name in REPORT_FILES:  # each file replaced in one rename; anything else in `out` stays
+            (partial.root / "report" / name).replace(out / name)
+        partial.finish()
+    return report, seconds
+
+
+def _run(
+    rows: pd.DataFrame, policy: Policy, partial: Partial, workers: int, policy_name: str | None, policy_options: dict | None
+) -> None:
+    """Run `rows`, each rollout saved to `partial` as it ends."""
+    if rows.empty:
+        return
     if workers > 1 and policy_name is not None:
         chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]
-        with multiprocessing.get_context("spawn").Pool(len(chunks)) as pool:
-            logs = [log for part in pool.starmap(run_chunk, [(policy_name, c, policy_options) for c in chunks]) for log in part]
+        # Ctrl-C reaches the whole process group: the workers ignore it, this process stops the pool
+        with multiprocessing.get_context("spawn").Pool(len(chunks), initializer=signal.signal, initargs=_IGNORE_SIGINT) as pool:
+            pool.starmap(run_chunk, [(policy_name, c, policy_options, partial) for c in chunks])
     else:
         runner = Runner(policy)
-        it = tqdm(rows.iterrows(), total=len(rows), desc=policy.name, unit="rollout")
-        logs = [runner.run(row).to_row() for _, row in it]
+        for _, row in tqdm(rows.iterrows(), total=len(rows), desc=policy.name, unit="rollout"):
+            partial.save(int(row["row"]), runner.run(row).to_row())
         runner.close()
-    seconds = time.perf_counter() - start
-    out.mkdir(parents=True, exist_ok=True)
+
+
+def _report(exam: Exam, rows: pd.DataFrame, policy: Policy, logs: list[dict], staged: Path, workers: int, baseline: bool) -> dict:
+    """Score `logs` from the written rollouts.parquet, as the offline scorer would, and write every
+    report file to `staged`."""
+    staged.mkdir(parents=True, exist_ok=True)
     table = pa.Table.from_pylist(logs)
-    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode()}), out / "rollouts.parquet")
-    logged, _ = read_logs(out / "rollouts.parquet")
+    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode()}), staged / ROLLOUTS)
+    logged, _ = read_logs(staged / ROLLOUTS)
     report = score(dataclasses.replace(exam, trials=rows.reset_index(drop=True)), logged, policy.name)
     if baseline and policy.name == SHORTCUT:
         store_baseline(exam, list(rows["row"]), report["faces"])
         report["baseline"] = report["faces"]
     elif baseline:
         report["baseline"] = shortcut_baseline(exam, rows, workers)
-    write_reports(out, report)
-    return report, seconds
+    write_reports(staged, report)
+    return report

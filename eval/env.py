@@ -94,8 +94,7 @@ class ExamEnv(gym.Env):
         self.scene.reset(self.episode)
         self.scene.set_physics_state(np.asarray(self.row["initial_state"]))
         self._start = self.scene.positions()
-        for _ in range(self.features.settle_steps):
-            self.scene.step(self.features.hold_action(self.episode.sim.robot_home))
+        self.scene.settle(self.episode)
         self._t = 0
         return self._obs(), self._info()
 

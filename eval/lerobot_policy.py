@@ -9,6 +9,11 @@ frames as float (1, 3, H, W) in [0, 1], state as float32 (1, D), the instruction
 The policy's own `select_action` keeps its action queue, so its chunking (`n_action_steps`,
 temporal ensembling) is the checkpoint's; `reset` clears it at each rollout.
 
+A checkpoint that `lerobot-train --peft.method_type=LORA ...` saved holds only its adapter
+(`adapter_config.json`, `adapter_model.safetensors`, `"use_peft": true`): it is loaded as lerobot's
+`make_policy` loads it, the base policy its adapter config names with this folder's config, the
+adapter on top, and this folder's processors.
+
 lerobot itself is imported only when such a policy is made; its features are checked against
 the exam's before any rollout (`check`).
 """
@@ -16,11 +21,17 @@ the exam's before any rollout (`check`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from core.layout import IMAGE_PREFIX, TASK_KEY
 from eval.policies import Context, PolicyError, require_features
+
+if TYPE_CHECKING:
+    from lerobot.configs.policies import PreTrainedConfig
+    from lerobot.policies.pretrained import PreTrainedPolicy
+    from peft import PeftModel
 
 INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; README 'LeRobot checkpoints')"
 
@@ -42,10 +53,16 @@ class LeRobotPolicy:
         try:
             config = PreTrainedConfig.from_pretrained(folder)
             config.device = device
-            self.policy = get_policy_class(config.type).from_pretrained(folder, config=config)
-            self.preprocess, self.postprocess = make_pre_post_processors(
+            policy_class = get_policy_class(config.type)
+            if config.use_peft:
+                self.policy = _adapted(policy_class, config, folder).to(device)
+            else:
+                self.policy = policy_class.from_pretrained(folder, config=config)
+            self.preprocess, self.postprocess = make_pre_post_processors(  # an adapter's own, as lerobot-eval reads them
                 config, pretrained_path=str(folder), preprocessor_overrides={"device_processor": {"device": device}}
             )
+        except PolicyError:
+            raise
         except Exception as exc:  # a folder lerobot cannot read: one line, not a traceback
             raise PolicyError(f"{folder}: lerobot cannot load this checkpoint: {type(exc).__name__}: {exc}") from None
         self.policy.eval()
@@ -81,3 +98,21 @@ class LeRobotPolicy:
         with torch.inference_mode():
             action = self.postprocess(self.policy.select_action(self.preprocess(batch)))
         return action[0].cpu().numpy()
+
+
+def _adapted(policy_class: type[PreTrainedPolicy], config: PreTrainedConfig, folder: Path) -> PeftModel:
+    """lerobot's `make_policy` for a PEFT checkpoint: the folder holds only the adapter, so the base policy its
+    adapter config names (`base_model_name_or_path`, the `--policy.path` it was trained from) is loaded with
+    this folder's config and the adapter put on top with peft."""
+    from peft import PeftConfig, PeftModel
+
+    adapter = PeftConfig.from_pretrained(str(folder))
+    base = adapter.base_model_name_or_path
+    if not base:
+        raise PolicyError(f"{folder}: its adapter_config.json names no base policy (base_model_name_or_path)")
+    try:
+        policy = policy_class.from_pretrained(base, config=config)
+    except Exception as exc:
+        why = f"{type(exc).__name__}: {exc}" if Path(base).is_dir() else f"no folder {Path(base).absolute()}"
+        raise PolicyError(f"{folder}: cannot load the base policy its adapter_config.json names ({base}): {why}") from None
+    return PeftModel.from_pretrained(policy, str(folder), config=adapter)

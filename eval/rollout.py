@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -22,6 +23,9 @@ from eval.policies import Context, Policy
 from eval.registry import make
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
+
+if TYPE_CHECKING:
+    from gen.partial import Partial
 
 
 @dataclass
@@ -146,9 +150,10 @@ class Runner:
             cams.close()
 
 
-def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None = None) -> list[dict]:
-    """A worker process's share of an exam: its own policy, scenes and renderers."""
+def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partial: Partial) -> None:
+    """A worker process's share of an exam: its own policy, scenes and renderers; each rollout is
+    saved to the partial run as soon as it ends, so an interrupted take keeps it."""
     runner = Runner(make(policy_name, **(options or {})))
-    logs = [runner.run(row).to_row() for _, row in rows.iterrows()]
+    for _, row in rows.iterrows():
+        partial.save(int(row["row"]), runner.run(row).to_row())
     runner.close()
-    return logs

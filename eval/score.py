@@ -12,7 +12,8 @@ alternative it achieved, or else on the one it came closest to if that is within
 threshold (5 cm; ties land nowhere).
 
 report.json schema (version 2):
-  policy, exam, referent, rollouts, trials
+  policy, exam (its label: `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam
+      `LIBERO-<Suite> canonical exam: ...`), referent, rollouts, trials
   faces.<face> = {k, n, rate, ci: [lo, hi], ci_trials: [lo, hi], chance, by_level} for task
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
       (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
@@ -129,30 +130,48 @@ def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[s
         raise LogError(
             f"the logs hold row {int(twice.iloc[0])} more than once ({len(twice)} duplicated rows): one log per rollout"
         )
-    starts = {
-        int(r["row"]): (EpisodeSpec.from_json(r["spec"]), np.asarray(r["initial_ee"], float)) for _, r in exam.trials.iterrows()
-    }
+    starts = {int(r["row"]): _starts(r) for _, r in exam.trials.iterrows()}
     parsed = {}
     for _, log in logs.iterrows():
         ee, objects = _positions(log)
         if not len(ee) or any(len(v) != len(ee) for v in objects.values()):
             raise LogError(f"row {log['row']}: every object needs one position per end-effector position")
         if int(log["row"]) in starts:
-            spec, hand = starts[int(log["row"])]
-            start = {"the end effector": (ee[0], hand), **{o.id: (objects.get(o.id, [None])[0], o.pos) for o in spec.objects}}
-            for name, (logged, recorded) in start.items():
-                off = float("inf") if logged is None else float(np.linalg.norm(np.asarray(logged) - recorded))
-                if off > START_TOLERANCE:
-                    where = "missing" if logged is None else f"{off * 100:.1f} cm from where it starts"
-                    raise LogError(
-                        f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}); "
-                        "log step 0 before any action"
-                    )
+            offs = [_off(start, ee[0], objects) for start in starts[int(log["row"])]]
+            if all(off is not None for off in offs):
+                name, where = offs[0]  # type: ignore[misc]
+                raise LogError(
+                    f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}) "
+                    "nor where reset() leaves it after the settle steps; log step 0 before any action"
+                )
         error = log["error"] if isinstance(log["error"], str) else None
         located = log.get("located")
         guess = None if located is None or (np.ndim(located) == 0 and pd.isna(located)) else np.asarray(located, float)
         parsed[int(log["row"])] = (ee, objects, error, guess)
     return parsed
+
+
+def _starts(row: pd.Series) -> list[dict[str, np.ndarray]]:
+    """Where a rollout's step 0 may find the hand and the objects: the recorded initial state
+    (a loop that logs the settle steps, as ours does) or after the settle steps (what the
+    gymnasium env's `reset()` returns), each as {name: position}."""
+    spec = EpisodeSpec.from_json(row["spec"])
+    starts = [{"the end effector": np.asarray(row["initial_ee"], float), **{o.id: np.asarray(o.pos) for o in spec.objects}}]
+    settled = json.loads(row["settled_start"] or "{}")
+    if settled:
+        objects = {k: np.asarray(v, float) for k, v in settled["objects"].items()}
+        starts.append({"the end effector": np.asarray(settled["ee"], float), **objects})
+    return starts
+
+
+def _off(start: dict[str, np.ndarray], ee: np.ndarray, objects: dict[str, np.ndarray]) -> tuple[str, str] | None:
+    """The first thing a log's step 0 does not show where `start` has it (name, how far), or None."""
+    logged = {"the end effector": ee, **{k: v[0] for k, v in objects.items()}}
+    for name, recorded in start.items():
+        off = float(np.linalg.norm(logged[name] - recorded)) if name in logged else float("inf")
+        if off > START_TOLERANCE:
+            return name, "missing" if name not in logged else f"{off * 100:.1f} cm from where it starts"
+    return None
 
 
 def _positions(log: pd.Series) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -233,7 +252,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     report = {
         "version": REPORT_VERSION,
         "policy": policy,
-        "exam": exam.name,
+        "exam": exam_label(exam),
         "referent": exam.meta["referent"],
         "rollouts": len(exam.trials),
         "trials": int(exam.trials["trial"].nunique()),
@@ -317,6 +336,21 @@ def _rates(table: dict) -> dict:
     }
 
 
+def exam_label(exam: Exam) -> str:
+    """The report's name for the exam. A canonical exam (python -m gen.canonical) holds its LIBERO
+    suite's own tasks and initial states, whose task rate is the suite's published number: it
+    must not read as a deconfounded `split=exam` exam of the same referent."""
+    canonical = exam.meta.get("canonical")
+    if not canonical:
+        return exam.name
+    suite = "LIBERO-" + canonical["suite"].removeprefix("libero_").title()
+    per_task = len(next(iter(canonical["states"].values())))
+    return (
+        f"{suite} canonical exam: LIBERO's own initial states, {per_task} per task, seed {exam.meta.get('seed', '?')} "
+        f"({exam.meta['trials']} trials)"
+    )
+
+
 def read_logs(path: Path) -> tuple[pd.DataFrame, str | None]:
     try:
         table = pq.read_table(path)
@@ -342,6 +376,9 @@ class ScoreOptions:
 def run(options: ScoreOptions) -> None:
     from eval.report import write_reports
 
+    out = Path(options.out or Path(options.logs).parent)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"out={out} is a file; out names the folder that gets report.json, report.md and report.html")
     try:
         exam = read(options.exam)
         logs, logged_policy = read_logs(Path(options.logs))
@@ -351,8 +388,10 @@ def run(options: ScoreOptions) -> None:
     baseline = report["faces"] if report["policy"] == SHORTCUT else cached_baseline(exam, list(exam.trials["row"]))
     if baseline is not None:
         report["baseline"] = baseline
-    out = Path(options.out or Path(options.logs).parent)
-    write_reports(out, report)
+    try:
+        write_reports(out, report)
+    except OSError as exc:  # e.g. a file where a folder of the path should be, or no permission
+        raise UserError(f"cannot write the reports to out={out} ({exc.strerror or exc})") from None
     print(f"wrote {out}/report.json, report.md, report.html")
 
 

@@ -31,7 +31,7 @@ from core.spec import EpisodeSpec, SceneObject, SimSettings, yaw_of
 from core.worlds import libero
 from gen.audit import audit
 from gen.cli import UserError, main
-from gen.config import check_output
+from gen.config import check_output, check_seed
 from gen.partial import staging
 from referents import Referent
 
@@ -60,6 +60,7 @@ def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
         world.requires()
     except worlds.WorldUnavailable as exc:
         raise UserError(f"world={world.name}: {exc}") from None
+    check_seed(options.seed)
     if not 1 <= options.states <= 50:
         raise UserError(f"states must be between 1 and 50 (LIBERO's initial states per task), got {options.states}")
     if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
@@ -143,7 +144,7 @@ def build(options: CanonicalOptions) -> None:
             values = {a.id: a.value for a in referent.alternatives(spec)}
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
-            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee)
+            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, scene.settled(spec))
             specs.append(spec)
             bar.update()
     bar.close()

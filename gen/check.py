@@ -4,7 +4,8 @@ Checks, in order, and stops at the first problem (exit code 1, one line naming i
 completion marker and format; episode counts across info.json, the episodes table and the scene
 records; frame index continuity and each episode's frame range; timestamps; every video file's
 frame count and each episode's span inside it; stats recomputed from the data; scene records
-against tasks.
+against tasks. An exam or a plan (`plan_only=true`) is not a dataset: it is refused with one
+line saying what it is and what checks it.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy as np
 from core.layout import ACTION_KEY, STATE_KEY
 from gen import scenes
 from gen.cli import Failed, UserError, main
+from gen.config import product_in
 from gen.lerobot_reader import INFO_PATH, LeRobotReader, frame_count
 from gen.stats import vector_stats
 
@@ -116,6 +118,14 @@ def run(options: CheckOptions) -> None:
     root = Path(options.dataset)
     if not root.is_dir():
         raise UserError(f"{root} is not a folder")
+    product = product_in(root)
+    if product == "exam":
+        raise UserError(
+            f"{root} is an exam, not a dataset: gen.check checks datasets; an exam's files (format, version, columns, rows) "
+            "are checked by whatever reads it: python -m eval, python -m eval.score, python -m gen.push"
+        )
+    if product == "plan":
+        raise UserError(f"{root} is a plan (plan_only=true): scene records and an audit, no episodes for gen.check to check")
     try:
         info = check(root)
     except Broken as exc:

@@ -159,5 +159,5 @@ def main(
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:
-        print(f"error: {exc or 'interrupted'}", file=sys.stderr)
+        print(f"error: {str(exc) or 'interrupted'}", file=sys.stderr)  # a bare Ctrl-C has no message
         return 130

@@ -16,7 +16,7 @@ from typing import List, Optional
 
 import referents
 from core import worlds
-from core.exam import EXAM_FORMAT
+from core.exam import ANSWERS_FILE, EXAM_FORMAT, TRIALS_FILE
 from core.layout import FeatureLayout, layout
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.cli import UserError, compose_config
@@ -27,13 +27,15 @@ from referents import Referent, UnknownReferent
 from referents.schema import ReferentSpecError
 
 DATASET_ENTRIES = {"meta", "data", "videos", "README.md", "preview.png", "images"}  # a dataset folder's own names
+EXAM_ENTRIES = {"exam.json", TRIALS_FILE, ANSWERS_FILE, "README.md"}  # an exam folder's own names
+PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": EXAM_ENTRIES}
 
 
 @dataclass
 class GenConfig:
     referent: str = "object"  # a referent type (referents/<type>.yaml)
     n: int = 20  # episodes
-    seed: int = 0
+    seed: int = 0  # non-negative; the same seed and options give byte-identical output
     out: Optional[str] = None  # output folder; default datasets/<referent> (split=exam: datasets/<referent>-exam)
     overwrite: bool = False  # replace a non-empty `out`
     resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
@@ -53,11 +55,8 @@ class GenConfig:
     confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
-    # native (joint targets, 16-d state) | libero (OSC end-effector deltas, LIBERO's features); default: the world's
-    profile: Optional[str] = None
-    world: Optional[str] = (
-        None  # native | libero_object | libero_spatial | libero_goal (LIBERO's scenes); default: the referent's
-    )
+    profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
+    world: Optional[str] = None  # native | libero_object | libero_spatial | libero_goal; default: the referent's
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -91,6 +90,7 @@ def validate(cfg: GenConfig) -> None:
         cfg.image_size = profile.image_size
     if cfg.n <= 0:
         raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
+    check_seed(cfg.seed)
     if not 16 <= cfg.image_size <= MAX_IMAGE_SIZE or cfg.image_size % 2:
         raise UserError(f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}], got {cfg.image_size}")
     physics_hz = round(1 / PHYSICS_DT)
@@ -118,10 +118,19 @@ def validate(cfg: GenConfig) -> None:
     if cfg.out is None:
         cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
     try:
-        check_output(Path(cfg.out), cfg.overwrite or cfg.resume and completed(Path(cfg.out)) is not None)
+        if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/run.py)
+            check_output(Path(cfg.out), cfg.overwrite)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
     check_size(cfg, profile)
+
+
+def finished(cfg: GenConfig) -> dict | None:
+    """The generation record of the finished dataset or plan that `resume=true` finds at `out`:
+    the run is then a no-op (or refused, when its options differ), so `out` is left as it is."""
+    if not cfg.resume or cfg.overwrite or cfg.split != "train" or cfg.out is None:
+        return None
+    return completed(Path(cfg.out))
 
 
 # What a run needs, measured: planning holds ~11.7 KB of memory per episode (a 20,000-episode
@@ -171,12 +180,46 @@ def _size(n: float) -> str:
     return f"{n:.1f} EB"
 
 
+def check_seed(seed: int) -> None:
+    """Random streams are seeded from non-negative integers only (numpy's SeedSequence)."""
+    if seed < 0:
+        raise UserError(f"seed must be a non-negative integer, got {seed}")
+
+
 def load_referent(cfg: GenConfig) -> Referent:
     """The run's referent, its spec validated with the run's overrides."""
     try:
         return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides())
-    except (UnknownReferent, ReferentSpecError) as exc:
+    except UnknownReferent as exc:
         raise UserError(str(exc)) from None
+    except ReferentSpecError as exc:
+        raise UserError(_blame_objects_per_scene(cfg, exc) or str(exc)) from None
+
+
+def _blame_objects_per_scene(cfg: GenConfig, exc: ReferentSpecError) -> str | None:
+    """When the spec loads with its own objects per scene but not with `objects_per_scene=`, the
+    option is the problem, not whichever spec field the referent's check names: say so, with the
+    values that load."""
+    if cfg.objects_per_scene is None:
+        return None
+    overrides = {**cfg.spec_overrides(), "objects_per_scene": None}
+    try:
+        own = referents.load(cfg.referent, cfg.spec, overrides)
+    except (UnknownReferent, ReferentSpecError):
+        return None
+    accepted = []
+    for k in range(2, len(own.config.layout.slots) + 1):
+        try:
+            referents.load(cfg.referent, cfg.spec, {**overrides, "objects_per_scene": k})
+            accepted.append(k)
+        except ReferentSpecError:
+            pass
+    own_field = f"{own.config.path}: objects_per_scene: "
+    reason = f" ({str(exc).removeprefix(own_field)})" if str(exc).startswith(own_field) else ""
+    named = f"spec={cfg.spec}" if cfg.spec else f"referent {cfg.referent}"
+    span = len(accepted) > 2 and accepted == list(range(accepted[0], accepted[-1] + 1))
+    takes = f"{accepted[0]} to {accepted[-1]}" if span else ", ".join(map(str, accepted))
+    return f"objects_per_scene={cfg.objects_per_scene} does not fit {named}{reason}; accepted: objects_per_scene={takes}"
 
 
 def resolve_world(cfg: GenConfig) -> worlds.World:
@@ -191,6 +234,11 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
         raise UserError(str(exc)) from None
     if world.name != home:
         others = ", ".join(referents.of_world(world.name)) or "none yet"
+        if cfg.spec:
+            raise UserError(
+                f"spec={cfg.spec} lays out scenes in world {home}, not {world.name}: leave world= out (or world={home}); "
+                f"referents of world {world.name}: {others}"
+            )
         raise UserError(
             f"referent {cfg.referent}'s scenes are in world {home}, not {world.name}; referents of world {world.name}: {others}"
         )
@@ -207,8 +255,8 @@ def check_output(out: Path, overwrite: bool) -> None:
     folder this project wrote (a dataset, a plan, an exam): a product is published by renaming
     it to `out`, so `out` can be neither a folder of someone else's files nor the current one.
 
-    Writability is tested by creating (and removing) a folder where the dataset will be staged:
-    permission bits alone say nothing for root or on read-only mounts.
+    A product folder that also holds files this project did not write is refused even with
+    `overwrite`: replacing the folder would delete them.
     """
     if out.exists() and not out.is_dir():
         raise UserError(f"out={out} exists and is not a folder")
@@ -218,20 +266,37 @@ def check_output(out: Path, overwrite: bool) -> None:
     if out.is_dir() and any(out.iterdir()):
         if not overwrite:
             raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
-        if product_in(out) is None:
-            found = sorted(p.name for p in out.iterdir())
-            listed = ", ".join(found[:3]) + (f" and {len(found) - 3} more" if len(found) > 3 else "")
+        found = sorted(p.name for p in out.iterdir())
+        product = product_in(out)
+        if product is None:
             raise UserError(
-                f"out={out} holds files this project did not write ({listed}); overwrite=true replaces only a dataset, "
+                f"out={out} holds files this project did not write ({listed(found)}); overwrite=true replaces only a dataset, "
                 "plan or exam made here: choose another out"
             )
-    parent = out.resolve().parent
+        strays = [name for name in found if name not in PRODUCT_ENTRIES[product]]
+        if strays:  # e.g. an eval report kept inside its exam: replacing the exam would delete it
+            raise UserError(
+                f"out={out} holds a {product} made here and files this project did not write ({listed(strays)}), "
+                "which overwrite=true would delete: move them out of it, or choose another out"
+            )
+    check_writable(out)
+
+
+def check_writable(out: Path, inside: bool = False) -> None:
+    """Refuse an `out` that cannot be made (with `inside`: written into): a folder is created (and
+    removed) beside it (in it), since permission bits alone say nothing for root or on read-only mounts."""
+    parent = out.resolve() if inside else out.resolve().parent
     while not parent.exists():
         parent = parent.parent
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".deconfound-write-test-", dir=parent))
     except OSError as exc:
         raise UserError(f"out={out} is not writable ({exc.strerror or exc} in {parent})") from None
+
+
+def listed(names: list[str]) -> str:
+    """The first few of `names`, for a one-line message."""
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
 
 
 def product_in(folder: Path) -> str | None:

@@ -9,7 +9,6 @@ dataset at `out` and never destroys the one that was there.
 from __future__ import annotations
 
 import json
-import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -82,30 +81,25 @@ def write_generation(root: Path, provenance: Provenance, episodes: int, failed_a
 
 
 def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, started: float, progress: bool) -> DatasetSummary:
-    partial = Partial(out)
-    if partial.exists and cfg.overwrite and not cfg.resume:
-        shutil.rmtree(partial.root)
-    try:
-        done = partial.start(run_record(cfg), cfg.resume)
-    except (FileExistsError, ValueError) as exc:
-        raise UserError(str(exc)) from None
-    failed = _simulate(cfg, planned, partial, done, progress)
-    root = partial.fresh_dataset()
-    rows, frames, written = _assemble(cfg, planned, partial, root)
-    audits = {"planned": planned.audit, "written": audit(planned.referent, written)}
-    audits["agree"] = agree(audits["planned"], audits["written"])
-    if not audits["agree"]:
-        raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
-    scenes.write(root, rows)
-    write_audit(root, audits)
-    contact_sheet(root, root / PREVIEW_PATH)
-    seconds = time.perf_counter() - started
-    summary = DatasetSummary(out, len(rows), frames, failed, seconds, audits["written"]["verdict"])
-    contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.sim.layout)
-    card.write(root, planned.referent, provenance, audits["written"], contents)
-    faults.point("finalize")
-    write_generation(root, provenance, summary.episodes, failed, seconds)
-    partial.publish()
+    with Partial(out) as partial:
+        done = partial.start(run_record(cfg), cfg.resume, discard=cfg.overwrite)
+        failed = _simulate(cfg, planned, partial, done, progress)
+        root = partial.fresh_dataset()
+        rows, frames, written = _assemble(cfg, planned, partial, root)
+        audits = {"planned": planned.audit, "written": audit(planned.referent, written)}
+        audits["agree"] = agree(audits["planned"], audits["written"])
+        if not audits["agree"]:
+            raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
+        scenes.write(root, rows)
+        write_audit(root, audits)
+        contact_sheet(root, root / PREVIEW_PATH)
+        seconds = time.perf_counter() - started
+        summary = DatasetSummary(out, len(rows), frames, failed, seconds, audits["written"]["verdict"])
+        contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.sim.layout)
+        card.write(root, planned.referent, provenance, audits["written"], contents)
+        faults.point("finalize")
+        write_generation(root, provenance, summary.episodes, failed, seconds)
+        partial.publish()
     return summary
 
 

@@ -77,7 +77,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
         state = producer.scene.physics_state().astype(np.float64).tolist()
         ee = [float(v) for v in producer.scene.ee_pos()]
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
-        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee)
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, producer.scene.settled(demo.spec))
     return rows
 
 

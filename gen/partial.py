@@ -10,10 +10,16 @@ moment loses at most the episodes in flight; `resume=true` produces only the mis
 The LeRobot files are assembled from the episode files only after all exist (a kill during
 assembly just means assembling again), and the dataset becomes visible at `out` in one rename
 with `meta/generation.json` (`"complete": true`) already inside it.
+
+A partial run is locked while a process works on it (an flock on its folder, which the kernel
+releases when that process ends, however it ends): a second run on the same `out` is told that
+another run is using it, instead of resuming or discarding the files under the first one's feet.
+The exam battery keeps its finished rollouts in a partial run of its own the same way.
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import pickle
@@ -21,9 +27,10 @@ import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from gen import faults
+from gen.cli import UserError
 
 if TYPE_CHECKING:
     from gen.produce import Produced
@@ -34,54 +41,92 @@ ASSEMBLED = "dataset"
 
 
 class Partial:
-    def __init__(self, out: Path) -> None:
+    """The partial run of `out`, its finished items (episodes, rollouts) kept one file each."""
+
+    def __init__(self, out: Path, items: str = EPISODES) -> None:
         self.out = out
         self.root = out.parent / f".{out.name}.partial"
+        self.items = self.root / items
+        self._lock: int | None = None
 
-    @property
-    def exists(self) -> bool:
-        return self.root.is_dir()
+    def __getstate__(self) -> dict:
+        """Worker processes get a copy to save items with; only the process that started the run holds the lock."""
+        return {**self.__dict__, "_lock": None}
+
+    def __enter__(self) -> Partial:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
 
     @property
     def dataset(self) -> Path:
         return self.root / ASSEMBLED
 
-    def start(self, run: dict, resume: bool) -> int:
-        """Create or reopen the partial run; returns how many leading episodes are done."""
+    def start(self, run: dict, resume: bool, discard: bool = False) -> int:
+        """Lock the partial run, then create it, reopen it (`resume`) or empty it (`discard`);
+        returns how many leading items are done. Refused with one line while another process holds
+        it, or when an interrupted run is there and neither `resume` nor `discard` asks what to do."""
+        self.root.mkdir(parents=True, exist_ok=True)
+        self._lock = os.open(self.root, os.O_RDONLY)
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.release()
+            raise UserError(
+                f"out={self.out}: another run is using {self.root} right now; wait for it to end, or choose another out"
+            ) from None
         record = self.root / "run.json"
-        if self.exists:
-            if not resume:
-                raise FileExistsError(
-                    f"out={self.out}: an interrupted run left {self.root}; pass resume=true to continue it, or delete it"
+        if record.is_file() and not resume:
+            if not discard:
+                raise UserError(
+                    f"out={self.out}: an interrupted run left {self.root}; "
+                    "pass resume=true to continue it, or overwrite=true to discard it"
                 )
-            previous = json.loads(record.read_text()) if record.is_file() else None
+            for entry in self.root.iterdir():  # the folder itself stays: it carries the lock
+                if entry.is_dir():
+                    shutil.rmtree(entry)
+                else:
+                    entry.unlink()
+        if record.is_file():
+            previous = json.loads(record.read_text())
             if previous != run:
-                changed = sorted(k for k in run if previous is None or previous.get(k) != run[k])
-                raise ValueError(f"resume=true, but the interrupted run at {self.root} used other options ({', '.join(changed)})")
+                changed = sorted(k for k in run if previous.get(k) != run[k])
+                raise UserError(f"resume=true, but the interrupted run at {self.root} used other options ({', '.join(changed)})")
         else:
-            (self.root / EPISODES).mkdir(parents=True)
+            self.items.mkdir(exist_ok=True)
             tmp = record.with_suffix(".tmp")
             tmp.write_text(json.dumps(run, indent=2, sort_keys=True))
             tmp.replace(record)
-        for stray in (self.root / EPISODES).glob("*.tmp"):
-            stray.unlink()  # an episode that was being written when the run died
+        for stray in self.items.glob("*.tmp"):
+            stray.unlink()  # an item that was being written when the run died
         done = 0
-        while (self.root / EPISODES / f"{done:06d}.pkl").is_file():
+        while self._path(done).is_file():
             done += 1
         return done
 
-    def save(self, index: int, produced: Produced) -> None:
-        path = self.root / EPISODES / f"{index:06d}.pkl"
+    def _path(self, index: int) -> Path:
+        return self.items / f"{index:06d}.pkl"
+
+    def saved(self) -> set[int]:
+        """The indices of the items finished so far, in any order."""
+        return {int(p.stem) for p in self.items.glob("*.pkl")}
+
+    def save(self, index: int, item: object) -> None:
+        path = self._path(index)
         tmp = path.with_suffix(".tmp")
         with open(tmp, "wb") as f:
-            pickle.dump(produced, f, protocol=pickle.HIGHEST_PROTOCOL)
+            pickle.dump(item, f, protocol=pickle.HIGHEST_PROTOCOL)
             faults.point(f"save:{index}")
         tmp.replace(path)
 
+    def load(self, index: int) -> Any:
+        with open(self._path(index), "rb") as f:
+            return pickle.load(f)
+
     def episodes(self, n: int) -> Iterator[Produced]:
         for i in range(n):
-            with open(self.root / EPISODES / f"{i:06d}.pkl", "rb") as f:
-                yield pickle.load(f)
+            yield self.load(i)
 
     def fresh_dataset(self) -> Path:
         """An empty folder to assemble into (whatever a killed assembly left is discarded)."""
@@ -91,7 +136,17 @@ class Partial:
 
     def publish(self) -> None:
         publish(self.dataset, self.out)
+        self.finish()
+
+    def finish(self) -> None:
+        """The product is at `out`: the partial run goes, and its lock with it."""
         shutil.rmtree(self.root)
+        self.release()
+
+    def release(self) -> None:
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
 
 
 def completed(out: Path) -> dict | None:

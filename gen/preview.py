@@ -69,14 +69,15 @@ def contact_sheet(root: Path, out: Path, n: int = 16, camera: str | None = None,
     rows = [np.concatenate(tiles[i : i + columns], axis=1) for i in range(0, len(tiles), columns)]
     sheet = np.concatenate(rows, axis=0)
     out.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(out), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR))
+    if not cv2.imwrite(str(out), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR)):
+        raise OSError(f"cannot write {out}")
     return out
 
 
 @dataclass
 class PreviewOptions:
     dataset: str = ""  # the dataset (or plan) folder
-    out: str | None = None  # the PNG to write; default <dataset>/preview.png
+    out: str | None = None  # the image to write (.png); default <dataset>/preview.png
     n: int = 16  # how many episodes, from the first
     camera: Optional[str] = None  # which camera's first frame; default the profile's front camera
 
@@ -88,10 +89,28 @@ def run(options: PreviewOptions) -> None:
     if options.n < 1:
         raise UserError(f"n must be at least 1, got {options.n}")
     out = Path(options.out) if options.out else root / PREVIEW_PATH
+    check_out(out)
     try:
         print(f"wrote {contact_sheet(root, out, options.n, options.camera)}")
     except ValueError as exc:
         raise UserError(str(exc)) from None
+    except OSError as exc:  # e.g. a file where a folder of the path should be, or no permission
+        raise UserError(f"out={out}: cannot write the sheet there ({exc.strerror or exc})") from None
+
+
+def check_out(out: Path) -> None:
+    """`out` must name an image file in a folder (or one to be made): checked before any frame
+    is decoded or rendered, since cv2 cannot write into a folder or a name without an image
+    extension."""
+    if out.is_dir():
+        raise UserError(f"out={out} is a folder; name the image to write, e.g. out={out / PREVIEW_PATH}")
+    if not cv2.haveImageWriter(str(out)):
+        raise UserError(f"out={out} is not an image file name; end it in .png (or another image extension, e.g. .jpg)")
+    folder = out.parent
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise UserError(f"out={out}: {folder} is a file, not a folder the sheet can go in")
 
 
 if __name__ == "__main__":

@@ -11,8 +11,7 @@ import time
 from pathlib import Path
 
 from gen import dataset, exam, plan_only
-from gen.config import GenConfig
-from gen.partial import completed
+from gen.config import GenConfig, finished
 from gen.plan import plan_and_audit
 from gen.provenance import Provenance
 
@@ -22,7 +21,7 @@ Summary = dataset.DatasetSummary | dataset.AlreadyComplete | plan_only.PlanSumma
 def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     started = time.perf_counter()
     out = Path(cfg.out or f"datasets/{cfg.referent}")
-    if cfg.resume and not cfg.overwrite and cfg.split == "train" and (generation := completed(out)) is not None:
+    if (generation := finished(cfg)) is not None:
         return dataset.already_complete(cfg, out, generation)
     planned = plan_and_audit(cfg)
     provenance = Provenance.of(cfg, planned.referent)

@@ -316,6 +316,19 @@ class Scene:
         """Execute one control period (`substeps` physics steps) of an action of the profile."""
         self.drive.step(action, self.substeps)
 
+    def settle(self, spec: EpisodeSpec) -> None:
+        """The actions holding the robot that the profile's own environment runs before a policy
+        acts (lerobot's LIBERO env: 10; none natively): an exam rollout's first observation follows them."""
+        features = spec.sim.layout
+        for _ in range(features.settle_steps):
+            self.step(features.hold_action(spec.sim.robot_home))
+
+    def settled(self, spec: EpisodeSpec) -> dict[str, list]:
+        """Settle, then where the end effector and every object stand: a rollout's step 0 when
+        its loop logs from the observation `reset()` returns (exam answers' `settled_start`)."""
+        self.settle(spec)
+        return {"ee": [float(v) for v in self.ee_pos()], "objects": {k: list(v) for k, v in self.positions().items()}}
+
     def state(self) -> np.ndarray:
         """observation.state of the profile. native: joint positions, finger positions,
         end-effector pose (xyz, wxyz); libero: end-effector position, axis-angle of the hand

@@ -14,6 +14,8 @@ module (`<type>.py`) that keeps to the contract in `referents.contract`:
 * `shortcut(config, spec) -> EpisodeSpec` — what an instruction-blind policy does in a scene,
   which the `position` reference policy demonstrates (default: pick up whatever stands nearest
   the canonical slot);
+* `words(config)` — what else `targets=`, `distractor_only=` and `holdout=` may name besides the
+  objects' names and attributes (e.g. a place), which `design` then honours (default: nothing);
 * `CONFOUNDS` — the shortcuts `confound=` may re-introduce (default: none).
 
 The built-in types live here; a spec file given by path may bring its type's module beside it
@@ -64,7 +66,10 @@ class Referent:
         return self.config.type
 
     def design(self, balance: Balance) -> Design:
-        design = self.code.design(self.config, balance)
+        try:
+            design = self.code.design(self.config, balance)
+        except ReferentSpecError as exc:
+            raise _held_out(self.config, exc) from None
         bodies = dict(self.inventory)
         for kind, n in Counter(p.candidate.kind for p in design.placements).items():
             if n > bodies.get(kind, 0):
@@ -127,6 +132,14 @@ def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:
     return code_of(module).demo
 
 
+def _held_out(config: ReferentConfig, exc: ReferentSpecError) -> ReferentSpecError:
+    """A spec that no longer holds once `holdout=` removed objects: the line names the option."""
+    if not config.holdout:
+        return exc
+    problem = str(exc).removeprefix(f"{config.path}: ")
+    return config.fail("holdout", f"without {', '.join(config.holdout)} the spec no longer holds: {problem}")
+
+
 def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | None = None) -> Referent:
     """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path` (whose type's
     module may stand beside it).
@@ -154,5 +167,11 @@ def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | No
     code = code_of(module)
     if config.confound and config.confound not in code.CONFOUNDS:
         raise config.fail("confound", f"{config.confound!r} is not defined for referent type {config.type!r}")
-    code.validate(config)
+    try:
+        code.validate(config)
+    except ReferentSpecError as exc:
+        raise _held_out(config, exc) from None
+    stray = config.unknown_words(tuple(code.words(config)))
+    if stray is not None:
+        raise stray
     return Referent(config, code, code.inventory(config))

@@ -45,6 +45,11 @@ def _accept(cfg: ReferentConfig) -> None:
     """No checks beyond the schema's."""
 
 
+def _no_words(cfg: ReferentConfig) -> tuple[str, ...]:
+    """Targets are named by the objects' names and attributes only."""
+    return ()
+
+
 def nearest_canonical(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     """The instruction-blind shortcut: pick up whatever stands nearest the canonical slot."""
     x, y = cfg.layout.slots[cfg.layout.canonical_slot]  # type: ignore[index]
@@ -66,6 +71,7 @@ class TypeModule:
     canonical: Callable[[ReferentConfig, Problem], Design | None] | None = (
         None  # a LIBERO task's own scene (gen.canonical), None for a task it cannot do
     )
+    words: Callable[[ReferentConfig], tuple[str, ...]] = _no_words  # what else `targets=`... may name (its design honours them)
     CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
 
     def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:

@@ -26,7 +26,14 @@ CONFOUNDS = ("position",)
 
 
 def _goals(cfg: ReferentConfig) -> dict[str, list[str]]:
-    return {str(k): [str(d) for d in v] for k, v in cfg.need("goals", dict).items()}
+    """Where each carried object may go, less what `holdout=` keeps out of the scenes."""
+    kept = {str(k): [str(d) for d in v if str(d) not in cfg.holdout] for k, v in cfg.need("goals", dict).items()}
+    return {k: v for k, v in kept.items() if k not in cfg.holdout}
+
+
+def _aims(cfg: ReferentConfig, carried: str) -> list[str]:
+    """The places `carried` may be asked to go: its goals that `targets=`/`distractor_only=` leave targetable."""
+    return [d for d in _goals(cfg)[carried] if _named(cfg, d).targetable]
 
 
 def _phrase(cfg: ReferentConfig, destination: str) -> str:
@@ -37,14 +44,18 @@ def _named(cfg: ReferentConfig, name: str) -> Candidate:
     return next(c for c in cfg.objects if c.name == name)
 
 
-def _fixed(cfg: ReferentConfig) -> list[Candidate]:
-    """The destinations on furniture (site kinds): in every scene, in the layout's last slots."""
-    world = worlds.world(cfg.world)
-    return [c for c in cfg.role("destination") if world.kind(c.kind).model == "site"]
+def _sites(cfg: ReferentConfig) -> dict[str, int]:
+    """The places on furniture (site kinds) and their layout slots: `sites` in the spec."""
+    return {str(k): int(v) for k, v in cfg.need("sites", dict).items()}
+
+
+def _fixed(cfg: ReferentConfig) -> list[Placement]:
+    """The places on furniture in every scene, each in its own slot (one `holdout=` keeps out is absent)."""
+    return [Placement(slug(c.key), c, _sites(cfg)[c.name]) for c in cfg.objects if c.name in _sites(cfg)]
 
 
 def _table_slots(cfg: ReferentConfig) -> list[int]:
-    return list(range(len(cfg.layout.slots) - len(_fixed(cfg))))
+    return [s for s in range(len(cfg.layout.slots)) if s not in _sites(cfg).values()]
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -56,23 +67,26 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("goals", "each carried object needs two or more places: the swap names another")
     if any(d not in cfg.need("phrases", dict) for v in goals.values() for d in v):
         raise cfg.fail("phrases", "needs the words for every place in goals")
-    movable = [c for c in cfg.objects if c not in _fixed(cfg)]
-    if len(movable) > len(_table_slots(cfg)):
-        raise cfg.fail("layout.slots", "needs a table slot per object, then one per place on furniture")
+    if not any(_aims(cfg, carried) for carried in goals):
+        raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place any object may be asked to go")
+    world = worlds.world(cfg.world)
+    sited = {c.name for c in cfg.role("destination") if world.kind(c.kind).model == "site"}
+    if set(_sites(cfg)) - set(cfg.holdout) != sited or not set(_sites(cfg).values()) <= set(range(len(cfg.layout.slots))):
+        raise cfg.fail("sites", "maps each place on furniture (a destination of a site kind) to its slot of layout.slots")
+    if len([c for c in cfg.objects if c.name not in sited]) > len(_table_slots(cfg)):
+        raise cfg.fail("layout.slots", "needs a table slot per object besides the places on furniture")
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
     goals = _goals(cfg)
-    carried = _named(cfg, balance.pick("carried", list(goals)))
-    goal = balance.pick(("goal", carried.name), goals[carried.name])
+    carried = _named(cfg, balance.pick("carried", [c for c in goals if _aims(cfg, c)]))
+    goal = balance.pick(("goal", carried.name), _aims(cfg, carried.name))
     other = balance.pick(("other", carried.name, goal), [d for d in goals[carried.name] if d != goal])
-    fixed = _fixed(cfg)
     placements: list[Placement] = []
-    for cand in (c for c in cfg.objects if c not in fixed):
+    for cand in (c for c in cfg.objects if c.name not in _sites(cfg)):
         free = [s for s in _table_slots(cfg) if s not in {p.slot for p in placements}]
         placements.append(Placement(slug(cand.key), cand, balance.pick(("slot", cand.key), free, also="slot")))
-    first = len(_table_slots(cfg))
-    placements += [Placement(slug(c.key), c, first + i) for i, c in enumerate(fixed)]
+    placements += _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}
     template = balance.pick("template", cfg.templates)
 
@@ -136,10 +150,10 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
     placements = []
     for instance, kind in problem.objects.items():
         x, y = problem.centre(problem.region_of(instance))
-        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in (slots[s] for s in _table_slots(cfg))]))
+        table = _table_slots(cfg)
+        slot = table[int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in (slots[s] for s in table)]))]
         placements.append(Placement(instance, next(c for c in cfg.objects if c.kind == kind), slot))
-    first = len(_table_slots(cfg))
-    placements += [Placement(slug(c.key), c, first + i) for i, c in enumerate(_fixed(cfg))]
+    placements += _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}
     template = cfg.templates[0]
 

@@ -50,14 +50,27 @@ def _slot(place: _Place) -> int:
 
 
 def _pairs(cfg: ReferentConfig) -> list[tuple[_Place, _Place]]:
-    """The pairs of places two bowls can stand in: apart, and said without a word in common."""
+    """The pairs of places two bowls can stand in: apart, said without a word in common, and
+    neither held out (`holdout=` may name places)."""
     gap = float(cfg.extra.get("min_gap", 0.12))
     slots = cfg.layout.slots
+    kept = [p for p in _places(cfg) if p.says not in cfg.holdout]
     return [
         (a, b)
-        for a, b in combinations(_places(cfg), 2)
+        for a, b in combinations(kept, 2)
         if not a.mentions & b.mentions and np.hypot(*np.subtract(slots[_slot(a)][:2], slots[_slot(b)][:2])) >= gap
     ]
+
+
+def _nameable(cfg: ReferentConfig, place: _Place) -> bool:
+    """Whether the bowl there may be the named one: `targets=` and `distractor_only=` may name places."""
+    said = [v for v in cfg.targets if v in words(cfg)]
+    return place.says not in cfg.distractor_only and (not said or place.says in said)
+
+
+def words(cfg: ReferentConfig) -> tuple[str, ...]:
+    """The places bowls stand in, as the instruction says them (what the card lists as values)."""
+    return tuple(p.says for p in _places(cfg))
 
 
 def _bowl(cfg: ReferentConfig) -> Candidate:
@@ -84,6 +97,8 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("objects", "needs one object with role: referent (the bowl) and one with role: destination")
     if not _pairs(cfg):
         raise cfg.fail("places", "no two places can hold the two bowls together")
+    if not any(_nameable(cfg, p) for pair in _pairs(cfg) for p in pair):
+        raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place whose bowl can be named")
 
 
 def _standing(cfg: ReferentConfig, place: _Place) -> Candidate:
@@ -102,7 +117,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
         partners.setdefault(a.region, []).append(b.region)
         partners.setdefault(b.region, []).append(a.region)
     at = {p.region: p for p in _places(cfg)}
-    named = at[balance.pick("named", list(partners))]
+    named = at[balance.pick("named", [region for region in partners if _nameable(cfg, at[region])])]
     other = at[balance.pick(("other", named.region), partners[named.region], also="present")]
     first, second = sorted((named, other), key=_slot)  # ids by place, not by role
     template = balance.pick("template", cfg.templates)

@@ -101,6 +101,7 @@ class ReferentConfig:
     targets: tuple[str, ...] = ()
     confound: str | None = None
     world: str = "native"  # the world its scenes happen in (core/worlds/): its objects and where they may stand
+    words: tuple[tuple[str, str], ...] = ()  # (option, value) pairs whose value names no object (see `unknown_words`)
     extra: dict[str, Any] = field(default_factory=dict)  # type-specific fields
 
     @classmethod
@@ -135,16 +136,17 @@ class ReferentConfig:
         if len({c.key for c in objects}) != len(objects):
             raise fail("objects", "two objects share the same name and attributes")
         vocabulary: dict[str, tuple[str, ...]] = {}
+        words: list[tuple[str, str]] = []  # values that name no object: the type's own words, checked when its module loads
         for option in ("holdout", "distractor_only", "targets"):
             values = tuple(str(v) for v in _strings(data.pop(option, None) or [], option, fail))
-            for v in values:
-                if not any(c.matches(v) for c in objects):
-                    raise fail(option, f"{v!r} names no object of this referent")
+            words += [(option, v) for v in values if not any(c.matches(v) for c in objects)]
             vocabulary[option] = values
         objects = [c for c in objects if not any(c.matches(v) for v in vocabulary["holdout"])]
         if not objects:
             raise fail("holdout", f"holds out every object ({', '.join(vocabulary['holdout'])}); nothing is left to place")
-        only = vocabulary["targets"]
+        only = [v for v in vocabulary["targets"] if ("targets", v) not in words]
+        if vocabulary["targets"] and not only:  # every target is one of the type's own words: it chooses among them
+            only = [c.key for c in objects]
         objects = [
             replace(
                 c,
@@ -192,6 +194,7 @@ class ReferentConfig:
             targets=vocabulary["targets"],
             confound=confound,
             world=world.name,
+            words=tuple(words),
             extra=data,
         )
 
@@ -200,6 +203,17 @@ class ReferentConfig:
         `objects_per_scene`, which is enough for any scene that holds each object at most once."""
         per_kind = Counter(c.kind for c in self.objects)
         return tuple(sorted((kind, min(n, self.objects_per_scene)) for kind, n in per_kind.items()))
+
+    def unknown_words(self, own: tuple[str, ...]) -> ReferentSpecError | None:
+        """The first holdout/distractor_only/targets value that names neither an object nor one of the
+        type's `own` words (what else its instructions name targets by, e.g. a place), or None."""
+        stray = [(option, v) for option, v in self.words if v not in own]
+        if not stray:
+            return None
+        option, value = stray[0]
+        named = {c.name for c in self.objects} | {c.attributes.get(self.naming, c.name) for c in self.objects}
+        accepted = ", ".join(sorted(named | set(own)))
+        return self.fail(option, f"{value!r} names no object of this referent; it accepts: {accepted}")
 
     def role(self, role: str) -> list[Candidate]:
         return [c for c in self.objects if c.role == role]

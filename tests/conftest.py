@@ -16,7 +16,9 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 from helpers import make_dataset  # noqa: E402
 
 # Modules whose tests simulate nothing (a test among them that does is marked `slow`).
-FAST_MODULES = {"test_spec", "test_plan", "test_shape", "test_fuzz", "test_referent_specs", "test_cli", "test_reader"}
+FAST_MODULES = {
+    "test_spec", "test_vocabulary", "test_plan", "test_shape", "test_fuzz", "test_referent_specs", "test_cli", "test_reader",
+}  # fmt: skip
 
 
 def pytest_configure(config: pytest.Config) -> None:

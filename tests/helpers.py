@@ -58,9 +58,8 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     """A dataset's episodes as scripts/libero_reference.py's `replay` takes them, rebuilt from
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
     joints and recorded actions; `target` is what moves and `container` where it goes. A world
-    with fixtures replays in its suite's own scene, the fixtures where the world stands them."""
+    with fixtures replays in its suite's own scene, the fixtures where the records stand them."""
     from core.layout import ACTION_KEY
-    from core.spec import yaw_quat
     from gen import scenes
     from gen.lerobot_reader import LeRobotReader
 
@@ -85,8 +84,11 @@ def liberos_replay(dataset: Path, world: World) -> dict:
         )
     if not world.fixtures:
         return {"episodes": episodes}
-    fixtures = [[f.name, *f.pos, *yaw_quat(f.yaw)] for f in world.fixtures]
-    return {"suite": world.suite, "fixtures": fixtures, "episodes": episodes}
+    fixtures = {
+        tuple([f["instance"], *f["pos"], *f["quat"]]) for r in scenes.read(dataset).scene for f in json.loads(r)["fixtures"]
+    }
+    assert len(fixtures) == len(world.fixtures), "every record names every fixture, at one pose"
+    return {"suite": world.suite, "fixtures": [list(f) for f in sorted(fixtures)], "episodes": episodes}
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:

@@ -1,7 +1,8 @@
 """A lab's LeRobot checkpoint takes the exam: lerobot's own `lerobot-train` fits ACT on a tiny
 generated dataset (CPU, a handful of steps, no pretrained backbone: nothing downloads), and the
-checkpoint it saves takes an exam trial through `policy=lerobot:`; checkpoints whose features do
-not match the exam's are refused before any rollout, with one line."""
+checkpoint it saves takes an exam trial through `policy=lerobot:`, and so does the LoRA adapter
+`lerobot-train --peft...` fits on top of it; checkpoints whose features do not match the exam's are
+refused before any rollout, with one line."""
 
 from __future__ import annotations
 
@@ -12,10 +13,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+from peft import PeftModel
 
 from core.exam import read
-from eval.policies import FeatureMismatch
+from core.layout import ACTION_KEY, IMAGE_PREFIX, TASK_KEY
+from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
 from helpers import make_dataset
 
@@ -44,6 +48,35 @@ def act_checkpoint(object_dataset: Path, tmp_path_factory: pytest.TempPathFactor
         "wandb.enable": "false",
         "output_dir": out,
     }
+    return _lerobot_train(args, out)
+
+
+@pytest.fixture(scope="module")
+def lora_checkpoint(act_checkpoint: Path, object_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """lerobot's own LoRA fine-tune of the ACT checkpoint, as a lab makes one: its folder holds only the adapter."""
+    out = tmp_path_factory.mktemp("lora") / "run"
+    args = {
+        "dataset.repo_id": "local/object",
+        "dataset.root": object_dataset,
+        "policy.path": act_checkpoint,
+        "policy.device": "cpu",
+        "policy.optimizer_lr": 0.01,  # two steps move the adapter far enough to change the actions
+        "peft.method_type": "LORA",
+        "peft.r": 8,
+        "peft.target_modules": '["linear1","linear2"]',  # ACT has no default targets
+        "steps": 2,
+        "batch_size": 2,
+        "num_workers": 0,
+        "save_freq": 2,
+        "eval_freq": 0,
+        "wandb.enable": "false",
+        "output_dir": out,
+    }
+    return _lerobot_train(args, out)
+
+
+def _lerobot_train(args: dict[str, object], out: Path) -> Path:
+    """Runs `lerobot-train` offline; the pretrained_model folder of its last (step 2) checkpoint."""
     env = {**os.environ, "HF_HUB_OFFLINE": "1"}
     done = subprocess.run(
         [str(Path(sys.executable).parent / "lerobot-train"), *(f"--{k}={v}" for k, v in args.items())],
@@ -101,3 +134,44 @@ def test_a_checkpoint_with_another_state_action_or_frame_size_is_refused(
     with pytest.raises(FeatureMismatch) as refused:
         policy.check({**features, key: other})
     assert str(refused.value) == f"checkpoint {act_checkpoint} expects '{key}' of shape {features[key]}, this exam's is {other}"
+
+
+def test_a_lerobot_lora_checkpoint_takes_an_exam_trial(lora_checkpoint: Path, exam_64: Path, tmp_path: Path) -> None:
+    assert (lora_checkpoint / "adapter_config.json").is_file()
+    assert not (lora_checkpoint / "model.safetensors").exists()
+    assert json.loads((lora_checkpoint / "config.json").read_text())["use_peft"]
+    done = _eval(f"policy=lerobot:{lora_checkpoint}", f"exam={exam_64}", "rows=1", f"out={tmp_path / 'report'}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads((tmp_path / "report" / "report.json").read_text())
+    assert not report["errors"], report["errors"]
+    assert report["faces"]["task"]["n"] == 1
+
+
+def test_a_lora_checkpoint_acts_as_its_base_with_the_adapter_applied(
+    act_checkpoint: Path, lora_checkpoint: Path, exam_64: Path
+) -> None:
+    features = read(exam_64).features
+    rng = np.random.default_rng(0)
+    observation: dict = {TASK_KEY: "pick up the cube"}
+    for key, shape in features.items():
+        if key.startswith(IMAGE_PREFIX):
+            observation[key] = rng.integers(0, 256, shape, dtype=np.uint8)
+        elif key != ACTION_KEY:
+            observation[key] = rng.standard_normal(shape).astype(np.float32)
+    base, lora = make(f"lerobot:{act_checkpoint}"), make(f"lerobot:{lora_checkpoint}")
+    assert isinstance(lora.policy, PeftModel)
+    lora.check(features)
+    assert not np.allclose(base.act(observation), lora.act(observation))
+
+
+def test_a_lora_checkpoint_whose_base_is_gone_is_refused_saying_where_it_looked(lora_checkpoint: Path, tmp_path: Path) -> None:
+    moved = tmp_path / "lora"
+    shutil.copytree(lora_checkpoint, moved)
+    adapter = moved / "adapter_config.json"
+    gone = tmp_path / "gone" / "pretrained_model"
+    adapter.write_text(json.dumps(json.loads(adapter.read_text()) | {"base_model_name_or_path": str(gone)}))
+    with pytest.raises(PolicyError) as refused:
+        make(f"lerobot:{moved}")
+    assert str(refused.value) == (
+        f"{moved}: cannot load the base policy its adapter_config.json names ({gone}): no folder {gone}"
+    )

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import pandas as pd
+import pytest
 
 from helpers import make_dataset
 
@@ -43,6 +44,28 @@ def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path
     faces = json.loads((tmp_path / "report.json").read_text())["faces"]
     assert faces["obeyed_name"]["rate"] >= 0.8 and faces["true_target"]["rate"] <= 0.1  # it reads the instruction
     assert faces["nonsense"]["k"] == 0 and faces["task"]["k"] == 0  # it never lifts anything
+
+
+@pytest.mark.parametrize(
+    "module, make",
+    [
+        ("gen", ["referent=libero_spatial", "n=2", "split=exam", "image_size=64"]),
+        ("gen.canonical", ["world=libero_goal", "states=1", "image_size=64"]),
+    ],
+)
+def test_the_readmes_own_loop_scores_a_libero_exam_whose_reset_settles(tmp_path: Path, module: str, make: list[str]) -> None:
+    """The same block, its first lines making a LIBERO-world exam (or a canonical one), whose
+    reset() runs the settle steps before the first observation: the scorer takes step 0 as the
+    block logs it, where reset() leaves the scene."""
+    loop = readme_loop()
+    assert loop.count('"-m", "gen"') == 1 and "make = [" in loop
+    start, end = loop.index("make = ["), loop.index("\n", loop.index("make = ["))
+    loop = loop[:start] + f"make = {make + ['out=' + 'X', 'overwrite=true']!r}".replace("'out=X'", 'f"out={exam}"') + loop[end:]
+    loop = loop.replace('"-m", "gen"', f'"-m", "{module}"')
+    ran = subprocess.run([sys.executable, "-c", loop], capture_output=True, text=True, cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr[-3000:]
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["faces"]["task"]["n"] > 0 and not report.get("errors")
 
 
 LAB_SCRIPT = """

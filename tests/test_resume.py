@@ -8,8 +8,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pyarrow as pa
@@ -163,3 +165,54 @@ def test_generation_records_what_regenerates_it(clean: Path) -> None:
     record = json.loads((clean / "meta/generation.json").read_text())
     assert record["complete"] is True and record["config"]["seed"] == 5
     assert record["mujoco"] == "3.9.0" and record["robosuite"] == "1.5.2" and len(record["referent_spec_hash"]) == 16
+
+
+def _files(root: Path) -> dict[Path, bytes]:
+    return {p: p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def test_overwrite_refuses_a_product_folder_that_also_holds_the_users_files(clean: Path, tmp_path: Path) -> None:
+    """overwrite=true replaces what this project wrote, never a report or notes the user put in it."""
+    exam = tmp_path / "exam"
+    assert _gen(f"out={exam}", "split=exam").returncode == 0
+    report = exam / "report-nothing"
+    took = subprocess.run(
+        [sys.executable, "-m", "eval", "policy=nothing", f"exam={exam}", "rows=1", f"out={report}"],
+        capture_output=True,
+        text=True,
+    )
+    assert took.returncode == 0, took.stderr
+    dataset = _copy(clean, tmp_path / "ds")
+    (dataset / "my_notes.txt").write_text("mine")
+    before = _files(tmp_path)
+    for out, stray, extra in [(exam, "report-nothing", ["split=exam"]), (dataset, "my_notes.txt", [])]:
+        refused = _gen(f"out={out}", "overwrite=true", *extra)
+        lines = refused.stderr.strip().splitlines()
+        assert refused.returncode == 2 and len(lines) == 1 and stray in lines[0] and "did not write" in lines[0], refused.stderr
+    assert _files(tmp_path) == before and not list(tmp_path.glob(".*"))
+    shutil.move(report, tmp_path / "report-nothing")
+    assert _gen(f"out={exam}", "split=exam", "overwrite=true").returncode == 0
+
+
+def test_a_second_run_on_the_same_out_is_told_another_run_is_using_it(clean: Path, tmp_path: Path) -> None:
+    """The first run holds its partial run locked: the second, with or without resume=true or
+    overwrite=true, is refused with one line and the first completes to the same bytes."""
+    out = tmp_path / "ds"
+    argv = [sys.executable, "-m", "gen", *ARGS, "workers=1", f"out={out}"]
+    first = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    record = tmp_path / ".ds.partial" / "run.json"
+    deadline = time.monotonic() + 120
+    while not record.is_file() and first.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.kill(first.pid, signal.SIGSTOP)  # still holding its lock, and certain not to finish meanwhile
+    try:
+        for extra in ([], ["resume=true"], ["overwrite=true"]):
+            second = _gen(f"out={out}", *extra)
+            lines = second.stderr.strip().splitlines()
+            assert second.returncode == 2 and len(lines) == 1 and "another run is using" in lines[0], second.stderr
+    finally:
+        os.kill(first.pid, signal.SIGCONT)
+    _, err = first.communicate()
+    assert first.returncode == 0, err
+    for rel in FILES:
+        assert (out / rel).read_bytes() == (clean / rel).read_bytes(), rel
