@@ -56,7 +56,7 @@ demo: $(STAMP)
 test: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=25
 
 # The pure core, planning, the audit and the command lines: nothing simulated (< 3 min on 2 cores).
 test-fast: $(STAMP)

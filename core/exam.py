@@ -31,8 +31,9 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
   chooses among), slot (int: slot of the object asked for), value (str: what the instruction
   calls it), initial_ee (list[float]: the end effector's position in the initial state),
   settled_start (JSON: {"ee": [x, y, z], "objects": {id: [x, y, z]}} after the profile's settle
-  steps, where `reset()` of the gymnasium env leaves them). A log's step 0 must show one of the two:
-  the initial state (then the settle steps are logged as steps) or the settled start.
+  steps, where `reset()` of the gymnasium env leaves them; only where the profile has settle
+  steps). A log's step 0 must show one of the two: the initial state (then the settle steps are
+  logged as steps) or the settled start.
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
@@ -72,7 +73,7 @@ ANSWER_COLUMNS = (
     "row", "face", "variant", "target", "program", "original_target", "original_program", "spec", "scene_hash",
     "alternatives", "slot", "value", "initial_ee",
 )  # fmt: skip
-SETTLED = "settled_start"  # an answers column added within version 2: exams made before it lack it
+SETTLED = "settled_start"  # an answers column of exams whose profile settles (added within version 2; older ones lack it)
 
 
 class ExamError(ValueError):
@@ -134,7 +135,7 @@ def trial_rows(
         "scene_hash": spec.scene_hash,
         "initial_state": initial_state,
         "initial_ee": initial_ee,
-        "settled_start": json.dumps(settled_start or {}),
+        SETTLED: json.dumps(settled_start or {}),
         "max_steps": max_steps,
         "alternatives": json.dumps(alternatives),
     }
@@ -155,7 +156,9 @@ def trial_rows(
 def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
     for i, r in enumerate(rows):
         r["row"] = i
-    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, (*ANSWER_COLUMNS, SETTLED))):
+    settles = any(r[SETTLED] != "{}" for r in rows)  # only a profile with settle steps records where they leave it
+    answers = (*ANSWER_COLUMNS, SETTLED) if settles else ANSWER_COLUMNS
+    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, answers)):
         pq.write_table(pa.Table.from_pylist([{c: r[c] for c in columns} for r in rows]), root / name)
     header = {
         "format": EXAM_FORMAT,

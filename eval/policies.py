@@ -125,7 +125,7 @@ class Position(Scripted):
         super().__init__("position")
 
     def reset(self, context: Context) -> None:
-        referent = referents.load(context.spec.referent)
+        referent = referents.load(context.spec.referent, world=context.spec.sim.world)
         chosen = referent.shortcut(context.spec)
         plan = referents.pick_and_lift if chosen.task.program == "pick" else referent.demo
         self._actions, self._t = self._plan(chosen, plan, context), 0

@@ -3,12 +3,14 @@ shows it, and how to regenerate the data."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
 from gen.preview import PREVIEW_PATH
 from gen.provenance import Provenance
 from referents import Referent
+from referents.schema import ReferentConfig
 
 FRONT_MATTER = """---
 license: apache-2.0
@@ -73,17 +75,21 @@ def plan_contents(episodes: int) -> str:
     return f"A plan of {episodes} episodes (`plan_only=true`: scene records and audit only, nothing simulated)."
 
 
-def write(root: Path, referent: Referent, provenance: Provenance, report: dict, contents: str) -> None:
-    """The card of a dataset or a plan; `contents` says which and how much. A contact sheet
-    (`preview.png`) beside it is shown at the top."""
-    rc = referent.config
+def write(root: Path, audited: Sequence[tuple[Referent, dict]], provenance: Provenance, contents: str) -> None:
+    """The card of a dataset or a plan, given each referent type with its audit (several: a mix,
+    gen/mix.py); `contents` says which and how much. A contact sheet (`preview.png`) beside it is
+    shown at the top."""
     sheet = (
         f"\n![The first frame of the first episodes, with their instructions]({PREVIEW_PATH})\n"
         if (root / PREVIEW_PATH).is_file()
         else ""
     )
-    objects = "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
-    templates = "\n".join(f"- `{t}`" for t in rc.templates)
+    text = _one(*audited[0], provenance, contents, sheet) if len(audited) == 1 else _mix(audited, provenance, contents, sheet)
+    (root / "README.md").write_text(text)
+
+
+def _vocabulary(rc: ReferentConfig) -> str:
+    """What the options held out, kept from the target or confounded on purpose."""
     vocabulary = ""
     if rc.holdout or rc.distractor_only or rc.targets:
         vocabulary = (
@@ -96,7 +102,20 @@ def write(root: Path, referent: Referent, provenance: Provenance, report: dict, 
             f"\n**Deliberately confounded (`confound={rc.confound}`)**: "
             "made to reproduce instruction blindness, not to train on.\n"
         )
-    text = (
+    return vocabulary
+
+
+def _objects(rc: ReferentConfig) -> str:
+    return "\n".join(f"| {c.key} | {c.kind} | {'' if c.targetable else 'distractor only'} |" for c in rc.objects)
+
+
+def _templates(rc: ReferentConfig) -> str:
+    return "\n".join(f"- `{t}`" for t in rc.templates)
+
+
+def _one(referent: Referent, report: dict, provenance: Provenance, contents: str, sheet: str) -> str:
+    rc = referent.config
+    return (
         FRONT_MATTER.format(referent=referent.name)
         + f"""
 # Deconfounded `{referent.name}` dataset
@@ -107,7 +126,7 @@ The instruction names the target by its **{rc.naming}**; every value of it is th
 distractor across slots, with {rc.objects_per_scene} objects per scene, all in view. Per-episode
 scene records and the one-word counterfactual instructions are in `meta/scenes.parquet`; the
 confound audit is in `meta/audit.json`.
-{vocabulary}
+{_vocabulary(rc)}
 ## Confound audit
 
 {audit_tables(report)}
@@ -116,11 +135,11 @@ confound audit is in `meta/audit.json`.
 
 | object | model | |
 |---|---|---|
-{objects}
+{_objects(rc)}
 
 ## Instruction templates
 
-{templates}
+{_templates(rc)}
 
 ## Provenance
 
@@ -137,7 +156,64 @@ python -m eval policy=<your policy> exam=datasets/{referent.name}-exam
 ```
 """
     )
-    (root / "README.md").write_text(text)
+
+
+def _mix(audited: Sequence[tuple[Referent, dict]], provenance: Provenance, contents: str, sheet: str) -> str:
+    """A mix's card: what the types share, then each type as its own card would say it."""
+    names = [referent.name for referent, _ in audited]
+    sections = "".join(
+        f"""
+## `{referent.name}` (world {referent.config.world})
+
+The instruction names the target by its **{referent.config.naming}**; every value of it is the target and a
+distractor across slots, with {referent.config.objects_per_scene} objects per scene, all in view.
+{_vocabulary(referent.config)}
+### Confound audit
+
+{audit_tables(report)}
+
+### Objects
+
+| object | model | |
+|---|---|---|
+{_objects(referent.config)}
+
+### Instruction templates
+
+{_templates(referent.config)}
+"""
+        for referent, report in audited
+    )
+    exams = "\n".join(f"python -m eval policy=<your policy> exam=datasets/{name}-exam" for name in names)
+    return (
+        FRONT_MATTER.format(referent="\n- referent-".join(names))
+        + f"""
+# Deconfounded dataset of {len(names)} referent types: {", ".join(f"`{name}`" for name in names)}
+
+{contents}
+{sheet}
+{provenance.config.n // len(names)} episodes of each type, taking turns in this order (episode i is of
+the type at place i mod {len(names)}), so every prefix of the dataset holds them equally. Each type is
+planned, deconfounded and audited on its own, as its own dataset would be. Per-episode scene
+records (their `referent` and `world` columns name each episode's type and world) and the one-word
+counterfactual instructions are in `meta/scenes.parquet`; each type's confound audit is in
+`meta/audit.json` under `referents`.
+{sections}
+## Provenance
+
+| | |
+|---|---|
+{provenance.table()}
+
+## Regenerate, and take the matching exams (one per type)
+
+```
+{provenance.command()}
+{provenance.exam_command()}
+{exams}
+```
+"""
+    )
 
 
 def write_exam(root: Path, referent: Referent, provenance: Provenance, report: dict, trials: int) -> None:

@@ -10,15 +10,16 @@ import json
 import os
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import List, Optional
+from typing import Any, List, Optional
 
 import referents
 from core import worlds
 from core.exam import ANSWERS_FILE, EXAM_FORMAT, TRIALS_FILE
 from core.layout import FeatureLayout, layout
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
+from gen import mix
 from gen.cli import UserError, compose_config
 from gen.partial import GENERATION_PATH, completed
 from gen.scenes import SCENES_PATH
@@ -33,7 +34,7 @@ PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": 
 
 @dataclass
 class GenConfig:
-    referent: str = "object"  # a referent type (referents/<type>.yaml)
+    referent: Any = "object"  # a referent type (referents/<type>.yaml), or a list of types that share one dataset
     n: int = 20  # episodes
     seed: int = 0  # non-negative; the same seed and options give byte-identical output
     out: Optional[str] = None  # output folder; default datasets/<referent> (split=exam: datasets/<referent>-exam)
@@ -68,6 +69,13 @@ class GenConfig:
             "confound": self.confound,
         }
 
+    def shares(self) -> list[GenConfig]:
+        """The options of each referent type the run plans: this run's own for one type; for a list
+        (one dataset mixing them, gen/mix.py), each type with its equal share of `n`."""
+        if isinstance(self.referent, str):
+            return [self]
+        return [replace(self, referent=name, n=self.n // len(self.referent)) for name in self.referent]
+
 
 def parse(argv: list[str]) -> GenConfig:
     """Overrides -> validated config."""
@@ -77,6 +85,9 @@ def parse(argv: list[str]) -> GenConfig:
 
 
 def validate(cfg: GenConfig) -> None:
+    if not isinstance(cfg.referent, str):
+        _validate_mix(cfg)
+        return
     world = resolve_world(cfg)
     try:
         profile = layout(cfg.profile or world.profiles[0])
@@ -116,13 +127,53 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"objects_per_scene must be at least 2 (a swap needs another object), got {cfg.objects_per_scene}")
     load_referent(cfg)  # the spec's own problems come before any about out=
     if cfg.out is None:
-        cfg.out = str(Path("datasets") / (cfg.referent if cfg.split == "train" else f"{cfg.referent}-exam"))
+        name = cfg.referent if cfg.world == referents.world_of(cfg.referent, cfg.spec) else f"{cfg.referent}-{cfg.world}"
+        cfg.out = str(Path("datasets") / (name if cfg.split == "train" else f"{name}-exam"))
     try:
         if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/run.py)
             check_output(Path(cfg.out), cfg.overwrite)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
     check_size(cfg, profile)
+
+
+def _validate_mix(cfg: GenConfig) -> None:
+    """A list of referent types (gen/mix.py): each type is validated as its own run would be (its
+    share of `n`, into the same `out`), then they must record the same features and be different
+    types where they are laid out."""
+    names = mix.types(cfg.referent)
+    if len(names) == 1:  # a list of one is that type
+        cfg.referent = names[0]
+        validate(cfg)
+        return
+    listed_types = mix.listed(names)
+    if cfg.spec is not None:
+        raise UserError(f"spec= is one type's spec file and {listed_types} mixes built-in types: leave spec= out")
+    if cfg.split == "exam":
+        raise UserError(
+            f"split=exam makes one exam per referent type, not of {listed_types}: make each type's (referent=<type> split=exam)"
+        )
+    if cfg.n <= 0:
+        raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
+    mix.check_share(cfg.n, names)
+    if cfg.out is None:
+        cfg.out = str(Path("datasets") / mix.name(names))
+    shares = cfg.shares()
+    for share in shares:
+        validate(share)
+    recorded = [
+        (s.referent, f"profile {s.profile} ({', '.join(layout(str(s.profile)).image_keys)} at {s.image_size} px)") for s in shares
+    ]
+    common = set.intersection(*(set(worlds.world(str(s.world)).profiles) for s in shares))
+    mix.check_features(recorded, f"all of them take profile={sorted(common)[0]}" if common else "no profile is taken by all")
+    laid_out = [load_referent(s).name for s in shares]  # `world=` may make one type another's axis there
+    for i, name in enumerate(laid_out):
+        if name in laid_out[:i]:
+            other = names[laid_out.index(name)]
+            raise UserError(f"{listed_types}: {other} and {names[i]} are both {name} in world {shares[i].world}: name it once")
+    first = shares[0]
+    cfg.profile, cfg.image_size, cfg.workers = first.profile, first.image_size, first.workers
+    check_size(cfg, layout(str(cfg.profile)))
 
 
 def finished(cfg: GenConfig) -> dict | None:
@@ -189,7 +240,7 @@ def check_seed(seed: int) -> None:
 def load_referent(cfg: GenConfig) -> Referent:
     """The run's referent, its spec validated with the run's overrides."""
     try:
-        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides())
+        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides(), cfg.world)
     except UnknownReferent as exc:
         raise UserError(str(exc)) from None
     except ReferentSpecError as exc:
@@ -204,13 +255,13 @@ def _blame_objects_per_scene(cfg: GenConfig, exc: ReferentSpecError) -> str | No
         return None
     overrides = {**cfg.spec_overrides(), "objects_per_scene": None}
     try:
-        own = referents.load(cfg.referent, cfg.spec, overrides)
+        own = referents.load(cfg.referent, cfg.spec, overrides, cfg.world)
     except (UnknownReferent, ReferentSpecError):
         return None
     accepted = []
     for k in range(2, len(own.config.layout.slots) + 1):
         try:
-            referents.load(cfg.referent, cfg.spec, {**overrides, "objects_per_scene": k})
+            referents.load(cfg.referent, cfg.spec, {**overrides, "objects_per_scene": k}, cfg.world)
             accepted.append(k)
         except ReferentSpecError:
             pass
@@ -223,8 +274,8 @@ def _blame_objects_per_scene(cfg: GenConfig, exc: ReferentSpecError) -> str | No
 
 
 def resolve_world(cfg: GenConfig) -> worlds.World:
-    """The world a run's scenes happen in: the referent's, which `world=` may only confirm;
-    its files must be installed."""
+    """The world a run's scenes happen in: the referent's own, or one `world=` names that carries
+    it (referents.worlds_of); its files must be installed."""
     if cfg.spec is None and cfg.referent not in referents.available():
         raise UserError(f"unknown referent {cfg.referent!r}; available: {', '.join(referents.available())}")
     home = referents.world_of(cfg.referent, cfg.spec)
@@ -239,9 +290,12 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
                 f"spec={cfg.spec} lays out scenes in world {home}, not {world.name}: leave world= out (or world={home}); "
                 f"referents of world {world.name}: {others}"
             )
-        raise UserError(
-            f"referent {cfg.referent}'s scenes are in world {home}, not {world.name}; referents of world {world.name}: {others}"
-        )
+        carriers = referents.worlds_of(cfg.referent)
+        if world.name not in carriers:
+            raise UserError(
+                f"referent {cfg.referent} has no design in world {world.name}; worlds that carry {cfg.referent}: "
+                f"{', '.join(carriers)} (referents of world {world.name}: {others})"
+            )
     try:
         world.requires()
     except worlds.WorldUnavailable as exc:

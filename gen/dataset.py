@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from core.spec import EpisodeSpec
-from gen import card, faults, scenes
+from gen import card, faults, mix, scenes
 from gen.audit import agree, audit
 from gen.cli import UserError
 from gen.config import GenConfig
@@ -22,6 +22,7 @@ from gen.partial import GENERATION_PATH, Partial
 from gen.plan import Planned
 from gen.preview import PREVIEW_PATH, contact_sheet
 from gen.provenance import Provenance, run_record
+from referents import Referent
 
 AUDIT_PATH = "meta/audit.json"
 
@@ -70,8 +71,32 @@ def already_complete(cfg: GenConfig, out: Path, generation: dict) -> AlreadyComp
     return AlreadyComplete(out, generation["episodes"])
 
 
-def write_audit(root: Path, audits: dict) -> None:
-    (root / AUDIT_PATH).write_text(json.dumps(audits, indent=2))
+def audits(planned: Planned, written: list[EpisodeSpec] | None = None) -> list[tuple[Referent, dict]]:
+    """Each referent type with its audits: of its plan and, given the written episodes, of its
+    written ones, which must agree (resampled demos keep their roles)."""
+    records = []
+    for place, share in enumerate(planned.shares):
+        record = {"planned": share.audit}
+        if written is not None:
+            record["written"] = audit(share.referent, mix.share(written, place, len(planned.shares)))
+            record["agree"] = agree(record["planned"], record["written"])
+            if not record["agree"]:
+                raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
+        records.append((share.referent, record))
+    return records
+
+
+def verdict(audited: list[tuple[Referent, dict]]) -> str:
+    """The audits' verdict; a mix's (gen/mix.py) names each type's."""
+    if len(audited) == 1:
+        return audited[0][1]["verdict"]
+    return "; ".join(f"{referent.name}: {report['verdict']}" for referent, report in audited)
+
+
+def write_audit(root: Path, records: list[tuple[Referent, dict]]) -> None:
+    """`meta/audit.json`: the type's audits; a mix's, each type's under `referents`."""
+    content = records[0][1] if len(records) == 1 else {"referents": {referent.name: record for referent, record in records}}
+    (root / AUDIT_PATH).write_text(json.dumps(content, indent=2))
 
 
 def write_generation(root: Path, provenance: Provenance, episodes: int, failed_attempts: int, seconds: float) -> None:
@@ -86,17 +111,15 @@ def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, s
         failed = _simulate(cfg, planned, partial, done, progress)
         root = partial.fresh_dataset()
         rows, frames, written = _assemble(cfg, planned, partial, root)
-        audits = {"planned": planned.audit, "written": audit(planned.referent, written)}
-        audits["agree"] = agree(audits["planned"], audits["written"])
-        if not audits["agree"]:
-            raise RuntimeError("the audit of the written episodes disagrees with the plan's: resampling changed roles")
+        records = audits(planned, written)
+        audited = [(referent, record["written"]) for referent, record in records]
         scenes.write(root, rows)
-        write_audit(root, audits)
+        write_audit(root, records)
         contact_sheet(root, root / PREVIEW_PATH)
         seconds = time.perf_counter() - started
-        summary = DatasetSummary(out, len(rows), frames, failed, seconds, audits["written"]["verdict"])
-        contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.sim.layout)
-        card.write(root, planned.referent, provenance, audits["written"], contents)
+        summary = DatasetSummary(out, len(rows), frames, failed, seconds, verdict(audited))
+        contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.recording.layout)
+        card.write(root, audited, provenance, contents)
         faults.point("finalize")
         write_generation(root, provenance, summary.episodes, failed, seconds)
         partial.publish()
@@ -110,10 +133,10 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
     from gen.produce import DemoFailed
     from gen.workers import Job, WorkerCrash, produce
 
-    job = Job(cfg.referent, cfg.spec, cfg.spec_overrides(), planned.sim, cfg.codec, cfg.seed, cfg.max_attempts)
-    bar = tqdm(
-        total=len(planned.designs), initial=done, desc=planned.referent.name, unit="ep", disable=not progress, dynamic_ncols=True
-    )
+    types = tuple((one.referent, share.sim) for one, share in zip(cfg.shares(), planned.shares, strict=True))
+    job = Job(types, cfg.spec, cfg.spec_overrides(), cfg.codec, cfg.seed, cfg.max_attempts)
+    name = mix.name([share.referent.name for share in planned.shares])
+    bar = tqdm(total=len(planned.designs), initial=done, desc=name, unit="ep", disable=not progress, dynamic_ncols=True)
     failed = 0
     try:
         for index, produced in enumerate(produce(job, planned.designs, cfg.workers or 1, cfg.backend, start=done), start=done):
@@ -135,13 +158,13 @@ def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) ->
     """The LeRobot files, from the episode files, in order."""
     from gen.lerobot_writer import Layout, LeRobotWriter
 
-    sim, features = planned.sim, planned.sim.layout
+    sim, features = planned.recording, planned.recording.layout
     writer = LeRobotWriter(
         root, Layout(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
     )
     rows, written = [], []
     for produced in partial.episodes(cfg.n):
-        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced))
+        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced, mixed=len(planned.shares) > 1))
         written.append(produced.spec)
         faults.point(f"assemble:{len(rows) - 1}")
     writer.finalize()

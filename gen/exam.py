@@ -53,8 +53,8 @@ def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, s
         root.mkdir(parents=True)
         rows = _trials(cfg, planned, progress)
         exam.write(root, rows, _header(cfg, planned, provenance))
-        summary = ExamSummary(out, len(planned.designs), time.perf_counter() - started, planned.audit["verdict"])
-        card.write_exam(root, planned.referent, provenance, planned.audit, summary.trials)
+        summary = ExamSummary(out, len(planned.designs), time.perf_counter() - started, planned.only.audit["verdict"])
+        card.write_exam(root, planned.only.referent, provenance, planned.only.audit, summary.trials)
     return summary
 
 
@@ -64,8 +64,8 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
 
     from gen.produce import DemoFailed, Producer
 
-    referent = planned.referent
-    producer = Producer(referent, planned.sim)
+    referent = planned.only.referent
+    producer = Producer(referent, planned.only.sim)
     rows: list[dict] = []
     for i, design in enumerate(tqdm(planned.designs, desc=f"{referent.name} exam", unit="trial", disable=not progress)):
         try:
@@ -95,9 +95,10 @@ def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:
 
 
 def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
-    sim, features = planned.sim, planned.sim.layout
+    share = planned.only
+    sim, features = share.sim, share.sim.layout
     return {
-        "referent": planned.referent.name,
+        "referent": share.referent.name,
         "seed": cfg.seed,
         "split": "exam",
         "command": provenance.command(),
@@ -114,6 +115,6 @@ def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
             "action": features.action_meaning,
             **({} if features.name == NATIVE.name else {"mirrored": features.mirrored, "settle_steps": features.settle_steps}),
         },
-        "referent_spec": asdict(planned.referent.config),
-        "audit": planned.audit,
+        "referent_spec": asdict(share.referent.config),
+        "audit": share.audit,
     }

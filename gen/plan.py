@@ -4,7 +4,8 @@ Pure data: no simulator runs here, so a 10,000-episode plan takes seconds. Desig
 which objects, where, which is the target) are drawn in sequence by one balancer; poses are
 realised per episode from (seed, index, attempt), so re-realising a failed demo changes its
 poses but never its roles. `plan_and_audit` is the step every product (dataset, plan, exam)
-starts from: a plan whose confound audit finds a leak nobody asked for goes no further.
+starts from: a plan whose confound audit finds a leak nobody asked for goes no further. A plan
+of several referent types (gen/mix.py) plans and audits each type on its own and interleaves them.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 from core import worlds
 from core.layout import layout
 from core.spec import EpisodeSpec, SceneObject, SimSettings
+from gen import mix
 from gen.audit import audit
 from gen.cli import UserError
 from gen.config import GenConfig, load_referent
@@ -84,15 +86,35 @@ def plan(referent: Referent, n: int, seed: int, sim: SimSettings, split: str = "
     return [realize(referent, d, i, seed, sim, split=split) for i, d in enumerate(designs(referent, n, seed, split))]
 
 
-@dataclass
-class Planned:
-    """A product's plan: its referent, roles, realised specs and the audit of them."""
+@dataclass(frozen=True)
+class Share:
+    """One referent type's part of a plan: the type, where its scenes happen, the audit of its episodes."""
 
     referent: Referent
     sim: SimSettings
+    audit: dict
+
+
+@dataclass
+class Planned:
+    """A product's plan: its referent types' shares (one, or a mix's taking turns, gen/mix.py),
+    and the roles and realised specs of every episode in episode order."""
+
+    shares: tuple[Share, ...]
     designs: list[Design]
     specs: list[EpisodeSpec]
-    audit: dict
+
+    @property
+    def only(self) -> Share:
+        """The share of a plan of one type (an exam's: exams are made one type at a time)."""
+        (share,) = self.shares
+        return share
+
+    @property
+    def recording(self) -> SimSettings:
+        """Sim settings with what every share records (profile, frame size, rate, cameras; one
+        dataset records one set, gen/config.py checks): the first share's."""
+        return self.shares[0].sim
 
 
 def world_sim(world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20) -> SimSettings:
@@ -130,15 +152,24 @@ def check_audit(report: dict) -> None:
 
 def plan_and_audit(cfg: GenConfig) -> Planned:
     """The options -> the audited plan every product is built from (bad input: `UserError`)."""
-    referent = load_referent(cfg)
-    sim = sim_settings(cfg, worlds.world(referent.config.world))
-    try:
-        roles = designs(referent, cfg.n, cfg.seed, cfg.split)
-    except ReferentSpecError as exc:
-        raise UserError(str(exc)) from None
-    specs = [realize(referent, d, i, cfg.seed, sim, split=cfg.split) for i, d in enumerate(roles)]
+    types, roles = [], []
+    for one in cfg.shares():
+        referent = load_referent(one)
+        types.append((referent, sim_settings(one, worlds.world(referent.config.world))))
+        try:
+            roles.append(designs(referent, one.n, one.seed, one.split))
+        except ReferentSpecError as exc:
+            raise UserError(str(exc)) from None
+    episodes, k = mix.interleave(roles), len(types)
+    specs = []
+    for i, design in enumerate(episodes):
+        referent, sim = types[mix.turn(i, k)]
+        specs.append(realize(referent, design, i, cfg.seed, sim, split=cfg.split))
     if cfg.n >= PROGRESS_FROM:
         print(f"auditing the plan of {cfg.n} episodes ...", file=sys.stderr)
-    report = audit(referent, specs)
-    check_audit(report)
-    return Planned(referent, sim, roles, specs, report)
+    shares = []
+    for place, (referent, sim) in enumerate(types):
+        report = audit(referent, mix.share(specs, place, k))
+        check_audit(report)
+        shares.append(Share(referent, sim, report))
+    return Planned(tuple(shares), episodes, specs)

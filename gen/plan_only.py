@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gen import card, scenes
-from gen.dataset import write_audit, write_generation
+from gen.dataset import audits, verdict, write_audit, write_generation
 from gen.partial import staging
 from gen.plan import Planned
 from gen.provenance import Provenance
@@ -31,10 +31,13 @@ class PlanSummary:
 def build(planned: Planned, provenance: Provenance, out: Path, started: float) -> PlanSummary:
     with staging(out) as root:
         (root / "meta").mkdir(parents=True)
-        scenes.write(root, [scenes.row(i, spec) for i, spec in enumerate(planned.specs)])
-        write_audit(root, {"planned": planned.audit})
+        mixed = len(planned.shares) > 1
+        scenes.write(root, [scenes.row(i, spec, mixed=mixed) for i, spec in enumerate(planned.specs)])
+        records = audits(planned)
+        write_audit(root, records)
+        audited = [(referent, record["planned"]) for referent, record in records]
         seconds = time.perf_counter() - started
-        summary = PlanSummary(out, len(planned.specs), seconds, planned.audit["verdict"])
-        card.write(root, planned.referent, provenance, planned.audit, card.plan_contents(summary.episodes))
+        summary = PlanSummary(out, len(planned.specs), seconds, verdict(audited))
+        card.write(root, audited, provenance, card.plan_contents(summary.episodes))
         write_generation(root, provenance, summary.episodes, 0, seconds)
     return summary

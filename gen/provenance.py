@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import platform
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from functools import cached_property
 from importlib import metadata
@@ -56,34 +57,49 @@ class Provenance:
     )
 
     @classmethod
-    def of(cls, cfg: GenConfig, referent: Referent) -> Provenance:
-        return cls(cfg, asdict(referent.config))
+    def of(cls, cfg: GenConfig, types: Sequence[Referent]) -> Provenance:
+        """A mix of types (gen/mix.py) records each one's spec, by type."""
+        if len(types) == 1:
+            return cls(cfg, asdict(types[0].config))
+        return cls(cfg, {referent.name: asdict(referent.config) for referent in types})
 
     @cached_property
     def spec_hash(self) -> str:
         """Content hash of the resolved referent spec."""
         return hashlib.sha256(json.dumps(self.referent_spec, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
-    def command(self) -> str:
-        """The `python -m gen ...` line that regenerates this product."""
+    def _options(self) -> list[tuple[str, str]]:
+        """(option, as the command line spells it) for every option the product's command names
+        besides `referent`."""
         cfg = self.config
-        parts = [f"referent={cfg.referent}", f"n={cfg.n}", f"seed={cfg.seed}", f"image_size={cfg.image_size}", f"fps={cfg.fps}"]
+        parts = [("n", f"n={cfg.n}"), ("seed", f"seed={cfg.seed}"), ("image_size", f"image_size={cfg.image_size}")]
+        parts.append(("fps", f"fps={cfg.fps}"))
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
         for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile"):
             value = getattr(cfg, name)
             if value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
-                parts.append(f"{name}={value}")
+                parts.append((name, f"{name}={value}"))
         for name in LIST_OPTIONS:
             if getattr(cfg, name):
-                parts.append(f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'")
+                parts.append((name, f"'{name}=[{','.join(repr(v) for v in getattr(cfg, name))}]'"))
         if cfg.plan_only:
-            parts.append("plan_only=true")
-        return "python -m gen " + " ".join(parts)
+            parts.append(("plan_only", "plan_only=true"))
+        return parts
+
+    def command(self) -> str:
+        """The `python -m gen ...` line that regenerates this product."""
+        referent = self.config.referent
+        named = f"referent={referent}" if isinstance(referent, str) else f"'referent=[{','.join(referent)}]'"
+        return " ".join(["python -m gen", named, *(text for _, text in self._options())])
 
     def exam_command(self) -> str:
-        """The held-out exam for a dataset: same referent and options, exam split, another seed."""
-        kept = [p for p in self.command().split(" ") if p.split("=")[0].lstrip("'") not in NOT_INHERITED_BY_EXAM]
-        return " ".join([*kept, "n=200", f"seed={self.config.seed + 1}", "split=exam"])
+        """The held-out exam for a dataset: same referent and options, exam split, another seed;
+        for a mix of types (gen/mix.py) one line per type, each type's exam."""
+        kept = [text for name, text in self._options() if name not in NOT_INHERITED_BY_EXAM]
+        return "\n".join(
+            " ".join(["python -m gen", f"referent={one.referent}", *kept, "n=200", f"seed={self.config.seed + 1}", "split=exam"])
+            for one in self.config.shares()
+        )
 
     def table(self) -> str:
         """The card's provenance rows (markdown)."""

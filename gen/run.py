@@ -24,7 +24,7 @@ def generate(cfg: GenConfig, progress: bool = True) -> Summary:
     if (generation := finished(cfg)) is not None:
         return dataset.already_complete(cfg, out, generation)
     planned = plan_and_audit(cfg)
-    provenance = Provenance.of(cfg, planned.referent)
+    provenance = Provenance.of(cfg, [share.referent for share in planned.shares])
     if cfg.split == "exam":
         return exam.build(cfg, planned, provenance, out, started, progress)
     if cfg.plan_only:

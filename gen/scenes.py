@@ -6,7 +6,8 @@ Columns: episode_index (int), referent, instruction, target (an object id), scen
 spec_hash, scene_hash, failed_attempts (oracle attempts before the recorded one),
 initial_state (MuJoCo mjSTATE_INTEGRATION vector at frame 0) and outcome (JSON: every object's
 start and end position, the final end-effector position). A plan (`plan_only=true`) leaves the
-last three empty.
+last three empty. A dataset mixing referent types (gen/mix.py) also names each episode's world
+(`world`, after `referent`): its types may be laid out in different worlds.
 """
 
 from __future__ import annotations
@@ -30,11 +31,13 @@ if TYPE_CHECKING:
 SCENES_PATH = "meta/scenes.parquet"
 
 
-def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None) -> dict:
+def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None, mixed: bool = False) -> dict:
     """A scene record; without `produced` (a plan), the simulation columns are empty."""
+    world = {"world": spec.sim.world} if mixed else {}
     return {
         "episode_index": episode_index,
         "referent": spec.referent,
+        **world,
         "instruction": spec.instruction,
         "target": spec.target,
         "scene": json.dumps(spec.scene_record()),

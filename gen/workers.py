@@ -5,6 +5,8 @@ so the dataset is byte-identical whatever the number of workers or the backend. 
 back in episode order; the writer (in the calling process) only ever sees whole, verified
 episodes. A worker that dies mid-episode loses nothing that was written: its unfinished
 episodes are redone by a fresh pool, and the run stops with a clear error if crashes repeat.
+A mix of referent types (gen/mix.py) gives each worker one Producer per type, made when its
+first episode of that type comes.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from core.spec import SimSettings
-from gen import faults
+from gen import faults, mix
 from gen.produce import Produced, Producer
 from referents.design import Design
 
@@ -30,36 +32,41 @@ class WorkerCrash(RuntimeError):
 
 @dataclass(frozen=True)
 class Job:
-    """What a worker needs to build its own Producer: how to load the referent, and the sim."""
+    """What a worker needs to build its own Producers: how to load each referent type (those of a
+    mix take turns, gen/mix.py) and the sim of its world."""
 
-    referent: str
+    referents: tuple[tuple[str, SimSettings], ...]
     spec_path: str | None
     overrides: dict[str, Any]
-    sim: SimSettings
     codec: str
     seed: int
     max_attempts: int
     split: str = "train"
 
-    def producer(self) -> Producer:
+    def producer(self, place: int) -> Producer:
         import referents
 
-        return Producer(referents.load(self.referent, self.spec_path, self.overrides), self.sim, self.codec)
+        name, sim = self.referents[place]
+        return Producer(referents.load(name, self.spec_path, self.overrides, sim.world), sim, self.codec)
 
 
-_producer: Producer | None = None  # one per worker process
+_producers: dict[int, Producer] = {}  # one per referent type, in each worker process
 _job: Job | None = None
 
 
 def _init(job: Job) -> None:
-    global _producer, _job
-    _producer, _job = job.producer(), job
+    global _job
+    _producers.clear()
+    _job = job
 
 
 def _produce(index: int, design: Design) -> Produced:
-    assert _producer is not None and _job is not None
+    assert _job is not None
     faults.point(f"worker:{index}")
-    return _producer.produce(design, index, _job.seed, _job.max_attempts)
+    place = mix.turn(index, len(_job.referents))
+    if place not in _producers:
+        _producers[place] = _job.producer(place)
+    return _producers[place].produce(design, index, _job.seed, _job.max_attempts)
 
 
 def produce(job: Job, plan: list[Design], workers: int = 1, backend: str = "process", start: int = 0) -> Iterator[Produced]:
@@ -72,8 +79,8 @@ def produce(job: Job, plan: list[Design], workers: int = 1, backend: str = "proc
             for i in range(start, len(plan)):
                 yield _produce(i, plan[i])
         finally:
-            assert _producer is not None
-            _producer.close()
+            for producer in _producers.values():
+                producer.close()
     else:
         yield from _processes(job, plan, workers, start)
 

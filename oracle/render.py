@@ -12,7 +12,8 @@ import atexit
 import mujoco
 import numpy as np
 
-from oracle.scene import HIDDEN_GROUP, Scene
+from core.layout import AGENTVIEW, NATIVE
+from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
 
 
 class Cameras:
@@ -30,24 +31,54 @@ class Cameras:
         flags = self.renderer.scene.flags
         for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):
             flags[flag] = False
-        self.option = mujoco.MjvOption()
-        self.option.geomgroup[0] = False  # collision geoms
-        self.option.geomgroup[HIDDEN_GROUP] = False  # parked bodies
-        self.option.sitegroup[:] = False
+        self.options = {c: self._option(scene.layout.cameras[c]) for c in cameras}
         self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
+        self._names: np.ndarray | None = None  # labels(): each geom's object, read from the model at the first call
         self._closed = False
         # Free the GL context before interpreter teardown, which otherwise reports EGL errors.
         atexit.register(self.close)
+
+    @staticmethod
+    def _option(camera: str) -> mujoco.MjvOption:
+        """What a model camera draws: no collision geoms, parked bodies or sites; a mirror plate
+        (oracle/scene.py) only from the agentview camera, whose view of the mirror it stands for."""
+        option = mujoco.MjvOption()
+        option.geomgroup[0] = False  # collision geoms
+        option.geomgroup[HIDDEN_GROUP] = False  # parked bodies
+        option.geomgroup[MIRROR_GROUP] = camera == NATIVE.cameras[AGENTVIEW]
+        option.sitegroup[:] = False
+        return option
 
     def render(self) -> dict[str, np.ndarray]:
         """One frame per camera; the arrays are reused by the next call."""
         layout = self.scene.layout
         for cam in self.cameras:
-            self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.option)
+            self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.options[cam])
             self.renderer.render(out=self._buffers[cam])
             if layout.mirrored:
                 self._buffers[cam][:] = self._buffers[cam][:, ::-1]
         return self._buffers
+
+    def labels(self) -> dict[str, np.ndarray]:
+        """Per camera, the name of the object each pixel of its frame shows (robosuite's object
+        name: its top-level body's without `_main`; '' for none), from MuJoCo's segmentation
+        render with the frames' options, mirrored as they are: what the picture tests judge each
+        object by (scripts/libero_reference.py writes LIBERO's)."""
+        m, layout = self.scene.model, self.scene.layout
+        if self._names is None:  # each geom's object, and '' for no geom
+            roots = m.body_rootid[m.geom_bodyid]
+            self._names = np.array([m.body(int(r)).name.removesuffix("_main") for r in roots] + [""])
+        names, out = self._names, {}
+        self.renderer.enable_segmentation_rendering()
+        try:
+            for cam in self.cameras:
+                self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.options[cam])
+                seg = self.renderer.render()  # (objid, objtype) per pixel
+                labels = names[np.where(seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM, seg[..., 0], -1)]
+                out[cam] = labels[:, ::-1] if layout.mirrored else labels
+        finally:
+            self.renderer.disable_segmentation_rendering()
+        return out
 
     def close(self) -> None:
         if not self._closed:

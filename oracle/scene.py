@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import logging
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import mujoco
 import numpy as np
+from scipy.optimize import nnls
 
 from core import catalog, worlds
 from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
@@ -49,7 +51,13 @@ SITE = "site"  # a kind whose model is a fixture's site (core.catalog.Kind): a p
 LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
+HULL_POINTS = 200  # hand_gap takes a mesh of more vertices as its bounding box: a few cm of box cost less than its hull
+HULL_WEIGHT = 1e3  # _hull_distance's weight on its weights summing to 1 (distances are a few cm)
 HIDDEN_GROUP = 5  # geoms of parked bodies move to this group, which no camera draws (oracle/render.py)
+MIRROR_GROUP = 4  # a fixture's mirror plate: drawn by the agentview camera alone (oracle/render.py)
+# How LIBERO's mirror tops look from its agentview camera: the light plaster wall behind the robot,
+# reflected (fitted to LIBERO's frames: the stove top from 75/255 to 16/255 mean absolute difference).
+MIRROR_LOOK = {"rgba": "0.8 0.8 0.8 1", "emission": "0.3"}
 
 
 def _robot(world: worlds.World) -> Panda:
@@ -116,6 +124,27 @@ def _fixture(placed: worlds.Placed) -> rs_objects.MujocoObject:
     body.set("pos", " ".join(map(str, placed.pos)))
     body.set("quat", " ".join(map(str, yaw_quat(placed.yaw))))
     return fixture
+
+
+def _mirror_plates(root: ET.Element, world: worlds.World) -> None:
+    """Over each fixture's mirror box (`Fixture.mirror`), a drawn-only plate on its top face in
+    MIRROR_GROUP. LIBERO renders the box's top as a mirror; with reflections off (3x the frame's
+    time) it would show its own dark metal. What the mirror shows depends on the camera: from the
+    fixed agentview camera the light wall behind the robot, which the plate's light material
+    stands for; from the wrist camera, looking down, the robot's dark hand, which the box's own
+    material already looks like: so only the agentview camera draws the plate."""
+    names = {f"{p.name}_{p.fixture.mirror}" for p in world.fixtures if p.fixture.mirror}
+    if not names:
+        return
+    ET.SubElement(root.find("asset"), "material", {"name": "mirror_top", **MIRROR_LOOK})  # type: ignore[arg-type]
+    for body in root.iter("body"):
+        for geom in body.findall("geom"):
+            if geom.get("name") in names:
+                sx, sy, sz = (float(v) for v in geom.get("size", "").split())
+                x, y, z = (float(v) for v in geom.get("pos", "0 0 0").split())
+                plate = {"name": f"{geom.get('name')}_mirror", "type": "box", "size": f"{sx} {sy} 0.0001"}
+                plate |= {"pos": f"{x} {y} {z + sz + 0.0002}", "group": str(MIRROR_GROUP), "material": "mirror_top"}
+                ET.SubElement(body, "geom", {**plate, "contype": "0", "conaffinity": "0", "mass": "0"})
 
 
 def _lookat_quat(pos: tuple[float, ...], target: tuple[float, ...]) -> np.ndarray:
@@ -188,6 +217,7 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     meshes.lighten(root, objects=world.builder != "table", faces=faces, robot_faces=world.robot_faces)
     if world.builder != "table":  # robosuite's own textures are small; the native scene's bytes stay as they are
         textures.shrink(root)
+        _mirror_plates(root, world)
     return ET.tostring(root, encoding="unicode")
 
 
@@ -234,6 +264,9 @@ class Scene:
         self.finger_qpos = np.array([m.joint(j).qposadr[0] for j in FINGER_JOINTS])
         self.ee_site = m.site(EE_SITE).id
         self.hand = m.body(HAND_BODY).id
+        # the hand's colliding geoms (fingers and pads included), and a second state to pose it in
+        self.hand_geoms = tuple(g for g in range(m.ngeom) if _colliding(m, g) and _descends(m, m.geom_bodyid[g], self.hand))
+        self._probe = mujoco.MjData(m)
         self.home = np.zeros(len(ARM_JOINTS))  # the episode's, from reset()
         self.substeps = 1  # set per spec from its fps
         self.bodies: dict[str, list[Body]] = {}
@@ -323,9 +356,12 @@ class Scene:
         for _ in range(features.settle_steps):
             self.step(features.hold_action(spec.sim.robot_home))
 
-    def settled(self, spec: EpisodeSpec) -> dict[str, list]:
+    def settled(self, spec: EpisodeSpec) -> dict[str, list] | None:
         """Settle, then where the end effector and every object stand: a rollout's step 0 when
-        its loop logs from the observation `reset()` returns (exam answers' `settled_start`)."""
+        its loop logs from the observation `reset()` returns (exam answers' `settled_start`);
+        None where the profile has no settle steps (`reset()` leaves the initial state)."""
+        if not spec.sim.layout.settle_steps:
+            return None
         self.settle(spec)
         return {"ee": [float(v) for v in self.ee_pos()], "objects": {k: list(v) for k, v in self.positions().items()}}
 
@@ -366,6 +402,54 @@ class Scene:
                 return z
             z -= 1e-4  # through the robot's geom, on down
         return -np.inf
+
+    def hand_gap(self, path: Sequence[np.ndarray], held: str | None, among: Sequence[str], within: float) -> float:
+        """The smallest distance, up to `within`, between the hand with the object `held` (carried
+        rigidly with it) and the objects `among`, the arm at each joint angles of `path`: how close a
+        planned move passes what stands beside it. Each colliding geom counts as the convex hull of
+        its `_outline` (MuJoCo 3.9's mj_geomDistance gave 0 for the hand 13 mm from a bottle's box, as
+        google-deepmind/mujoco#3383 reports of meshes); the simulation is untouched."""
+        m, probe = self.model, self._probe
+        probe.qpos[:] = self.data.qpos
+        mujoco.mj_kinematics(m, probe)
+        moving, carried = list(self.hand_geoms), self.placed[held] if held is not None else None
+        if carried is not None:  # its pose in the hand's frame
+            hand_rot = probe.xmat[self.hand].reshape(3, 3)
+            offset = hand_rot.T @ (probe.xpos[carried.body_id] - probe.xpos[self.hand])
+            turn = hand_rot.T @ probe.xmat[carried.body_id].reshape(3, 3)
+            moving += [g for g in carried.geom_ids if _colliding(m, g)]
+        standing = [g for o in among for g in self.placed[o].geom_ids if _colliding(m, g)]
+        outlines = {g: self._outline(g) for g in moving + standing}
+        radius = {g: float(np.linalg.norm(points, axis=1).max()) for g, points in outlines.items()}
+        gap, quat = within, np.zeros(4)
+
+        def placed(g: int) -> np.ndarray:
+            return probe.geom_xpos[g] + outlines[g] @ probe.geom_xmat[g].reshape(3, 3).T
+
+        for q in path:
+            probe.qpos[self.arm_qpos] = q
+            mujoco.mj_kinematics(m, probe)
+            if carried is not None:
+                hand_rot = probe.xmat[self.hand].reshape(3, 3)
+                mujoco.mju_mat2Quat(quat, (hand_rot @ turn).flatten())
+                probe.qpos[carried.qpos_adr : carried.qpos_adr + 7] = (*(probe.xpos[self.hand] + hand_rot @ offset), *quat)
+                mujoco.mj_kinematics(m, probe)
+            for a in moving:
+                for b in standing:  # bounding spheres first: most pairs are far apart
+                    if np.linalg.norm(probe.geom_xpos[a] - probe.geom_xpos[b]) - radius[a] - radius[b] < gap:
+                        gap = min(gap, _hull_distance(placed(a), placed(b)))
+        return gap
+
+    def _outline(self, geom: int) -> np.ndarray:
+        """Points (geom frame) whose convex hull holds the geom: a mesh's vertices (its collision
+        shape is their hull), else its bounding box's corners (a box's own; a larger mesh's or a
+        round geom's, a little more than it)."""
+        m = self.model
+        if m.geom_type[geom] == mujoco.mjtGeom.mjGEOM_MESH and m.mesh_vertnum[m.geom_dataid[geom]] <= HULL_POINTS:
+            start = m.mesh_vertadr[m.geom_dataid[geom]]
+            return m.mesh_vert[start : start + m.mesh_vertnum[m.geom_dataid[geom]]].astype(float)
+        centre, half = m.geom_aabb[geom, :3], m.geom_aabb[geom, 3:]
+        return centre + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
 
     def positions(self) -> dict[str, tuple[float, float, float]]:
         """Where every object of the episode is now."""
@@ -417,6 +501,20 @@ def axis_angle(wxyz: np.ndarray) -> np.ndarray:
     if np.isclose(den, 0.0):
         return np.zeros(3)
     return np.asarray(wxyz[1:]) * 2.0 * np.arccos(w) / den
+
+
+def _colliding(model: mujoco.MjModel, geom: int) -> bool:
+    return bool(model.geom_contype[geom] or model.geom_conaffinity[geom])
+
+
+def _hull_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance between the convex hulls of two point sets (0 where they meet): the origin's from
+    the hull of their differences, its nearest point a convex weighting of them, found by
+    non-negative least squares with the weights' sum to 1 as a heavily weighted extra row."""
+    differences = (a[:, None, :] - b[None, :, :]).reshape(-1, 3).T
+    rows = np.vstack([differences, np.full(differences.shape[1], HULL_WEIGHT)])
+    weights, _ = nnls(rows, np.array([0.0, 0.0, 0.0, HULL_WEIGHT]))
+    return float(np.linalg.norm(differences @ weights) / max(weights.sum(), 1e-12))
 
 
 def _descends(model: mujoco.MjModel, body: int, ancestor: int) -> bool:

@@ -14,7 +14,7 @@ from core import catalog, contact
 from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from core.success import PUSH_DIRECTION
-from oracle.ik import ArmIK, grasp_yaw
+from oracle.ik import ArmIK, IKError, grasp_yaw
 from oracle.scene import SITE, Scene, axis_angle
 from oracle.trajectory import Limits, joint_path
 
@@ -29,6 +29,8 @@ SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control st
 # the closing axis and this far across it, its tip this far below the grip site.
 FINGER_REACH, FINGER_HALF_WIDTH, FINGER_TIP = (0.039, 0.066), 0.011, 0.0095
 FINGER_MARGIN = 0.005  # how far above whatever stands beside a bowl the outer fingertip stays
+CARRY_MARGIN = 0.03  # how far the hand, and what it carries, passes from the objects standing in the scene (m)
+RELEASE_TURNS = np.radians([0.0, 45.0, -45.0, 90.0, -90.0])  # how far the hand may turn what it carries before lowering it
 RIM_SIDES = np.radians([0.0, 30.0, -30.0, 60.0, -60.0])  # where on a bowl's wall to grasp, from the robot-facing side
 
 
@@ -96,13 +98,22 @@ class Skills:
         are not in the way: like the furniture, they stand apart from the objects' places)."""
         return max(self.top_of(o.id)[2] for o in self.spec.objects if self._kind(o.id).model != SITE) + margin
 
+    def _plan(self, pos: np.ndarray, yaw: float, start: np.ndarray | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The arm's goal putting the grip site at `pos`, and its joint path there from `start`
+        (default: where the arm is)."""
+        start = self.q if start is None else start
+        goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=start)
+        return goal, joint_path(start, goal, self.dt, self.limits)
+
+    def _follow(self, goal: np.ndarray, path: list[np.ndarray], yaw: float) -> None:
+        for q in path:
+            self._execute(q)
+        self.q, self.yaw = goal, yaw
+
     def move_to(self, pos: np.ndarray, yaw: float | None = None) -> None:
         """Grip site to `pos`, pointing down, at `yaw` (default: keep the current yaw)."""
         yaw = self.yaw if yaw is None else yaw
-        goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=self.q)
-        for q in joint_path(self.q, goal, self.dt, self.limits):
-            self._execute(q)
-        self.q, self.yaw = goal, yaw
+        self._follow(*self._plan(pos, yaw), yaw)
 
     def move_linear(self, pos: np.ndarray, speed: float = 0.12) -> None:
         """Grip site along a straight line to `pos` (minimum-jerk timing), e.g. to push."""
@@ -170,7 +181,8 @@ class Skills:
         self.hold(2)
 
     def place(self, destination_id: str) -> None:
-        """Carry the held object over the destination, lower it onto it, release, retreat."""
+        """Carry the held object over the destination, lower it onto it, release, retreat; the hand
+        and what it carries keep CARRY_MARGIN from the objects standing beside the way."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
         over = self.top_of(destination_id)
@@ -181,13 +193,44 @@ class Skills:
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
-        if rim:  # up first: a joint-space path could swing a hanging bowl into furniture
+        above, down = [over[0], over[1], carry_z], [over[0], over[1], release_z]
+        yaw = self.yaw if rim else self._release_yaw(above, down, destination_id)  # a turned bowl would hang elsewhere
+        across = self._plan(above, yaw)
+        # Up first where the way across, still rising, would pass near a standing object, or a
+        # hanging bowl could swing into furniture.
+        if rim or self._gap(across[1], destination_id) < CARRY_MARGIN:
             self.move_to([*self.scene.ee_pos()[:2], carry_z])
-        self.move_to([over[0], over[1], carry_z])
-        lower = self.move_linear if rim else self.move_to
-        lower([over[0], over[1], release_z])
+            across = self._plan(above, yaw)
+        self._follow(*across, yaw)
+        if rim:  # straight down from where the hand is
+            self.move_linear(down)
+        else:  # from over the destination: an end-effector controller lags the plan, and would come down on a diagonal
+            self._settle(self.q)
+            self.move_to(down)
         self.open()
         self.move_to([over[0], over[1], release_z + 0.1])
+
+    def _release_yaw(self, above: list[float], down: list[float], destination_id: str) -> float:
+        """The hand's yaw as it comes down from `above` the destination to `down`: the first of
+        RELEASE_TURNS from its own that keeps CARRY_MARGIN from every standing object, else the one
+        passing farthest (the hand reaches 10 cm each way along its fingers' closing axis, 3 cm across)."""
+        gaps = {}
+        for yaw in (self.yaw + RELEASE_TURNS).tolist():
+            try:
+                over, _ = self._plan(above, yaw)
+                gaps[yaw] = self._gap(self._plan(down, yaw, start=over)[1], destination_id)
+            except IKError:  # out of the wrist's reach turned so
+                continue
+            if gaps[yaw] >= CARRY_MARGIN:
+                break
+        return max(gaps, key=lambda yaw: gaps[yaw], default=self.yaw)
+
+    def _gap(self, path: list[np.ndarray], destination_id: str) -> float:
+        """How close (up to CARRY_MARGIN) the hand, with what it holds, passes the objects standing in
+        the scene, the destination aside, along the joint path `path`."""
+        held = self.held[0] if self.held else None
+        standing = [o.id for o in self.spec.objects if o.id not in (held, destination_id) and self._kind(o.id).model != SITE]
+        return self.scene.hand_gap(path, held, standing, CARRY_MARGIN)
 
     def push(self, object_id: str, distance: float = 0.09, speed: float = 0.12) -> None:
         """Slide the object along the table (away from the robot) with the closed fingers.

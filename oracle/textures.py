@@ -9,7 +9,9 @@ hundred pixels, so the sampler reads a mipmap level well below the full size any
 texture image wider or taller than `TEXTURE_SIDE` is halved by averaging 2 x 2 texels (the box
 filter that builds mipmap levels) until it fits, so the levels that remain are the ones the
 renderer would have sampled. The results are cached on disk (`~/.cache/deconfound/textures`,
-keyed by the file's bytes).
+keyed by the file's bytes). A halved copy keeps its original's colour space: MuJoCo reads a PNG
+that declares sRGB (LIBERO's salad dressing) as sRGB, and the copy, which does not declare it,
+would otherwise be drawn lighter.
 """
 
 from __future__ import annotations
@@ -28,7 +30,18 @@ def shrink(root: ET.Element, side: int = TEXTURE_SIDE) -> None:
     for texture in root.iter("texture"):
         file = texture.get("file")
         if file and texture.get("type") in ("2d", "cube"):
-            texture.set("file", str(halved(file, side)))
+            small = halved(file, side)
+            if small != Path(file) and texture.get("colorspace", "auto") == "auto" and _srgb(file):
+                texture.set("colorspace", "sRGB")
+            texture.set("file", str(small))
+
+
+def _srgb(file: str) -> bool:
+    """Whether a PNG file declares the sRGB colour space (its sRGB chunk: how MuJoCo's `auto` reads it)."""
+    from PIL import Image
+
+    with Image.open(file) as image:  # reads the header only
+        return "srgb" in image.info
 
 
 def halved(file: str, side: int = TEXTURE_SIDE) -> Path:

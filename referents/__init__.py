@@ -33,15 +33,20 @@ import yaml
 
 from core.demo import Plan, Skills
 from core.spec import EpisodeSpec
+from referents import destination
 from referents.balance import Balance
 from referents.contract import TypeModule, code_of, pick_and_lift
 from referents.design import Design
 from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
 
-__all__ = ["HERE", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "pick_and_lift", "world_of"]
+__all__ = [
+    "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "pick_and_lift", "spec_file",
+    "world_of", "worlds_of",
+]  # fmt: skip
 
 HERE = Path(__file__).parent
+IN_WORLDS = HERE / "in_worlds"  # a built-in type's specs for other worlds than its own: <world>/<type>.yaml
 
 
 class UnknownReferent(ValueError):
@@ -67,7 +72,7 @@ class Referent:
 
     def design(self, balance: Balance) -> Design:
         try:
-            design = self.code.design(self.config, balance)
+            design = destination.add(self.config, self.code.design(destination.inner(self.config), balance))
         except ReferentSpecError as exc:
             raise _held_out(self.config, exc) from None
         bodies = dict(self.inventory)
@@ -81,7 +86,7 @@ class Referent:
         self.code.demo(skills, spec)
 
     def alternatives(self, spec: EpisodeSpec) -> list[Alternative]:
-        return self.code.alternatives(self.config, spec)
+        return self.code.alternatives(self.config, self._seen(spec))
 
     def assets(self) -> tuple[tuple[str, int], ...]:
         return self.inventory
@@ -91,7 +96,13 @@ class Referent:
 
     def shortcut(self, spec: EpisodeSpec) -> EpisodeSpec:
         """The episode an instruction-blind policy would do in this scene (what `position` demonstrates)."""
-        return self.code.shortcut(self.config, spec)
+        if destination.container(self.config) is None:
+            return self.code.shortcut(self.config, spec)
+        return destination.restored(spec, self.code.shortcut(self.config, destination.without(spec)))
+
+    def _seen(self, spec: EpisodeSpec) -> EpisodeSpec:
+        """The scene as the type sees it: a world's container (referents/destination.py) left out."""
+        return spec if destination.container(self.config) is None else destination.without(spec)
 
 
 def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | None:
@@ -103,21 +114,55 @@ def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | Non
     return HERE / f"{referent_type}.py" if referent_type in available() else None
 
 
-def world_of(name: str, spec_path: str | None = None) -> str:
-    """The world a referent's scenes happen in, read from its spec without validating it (a
-    spec that cannot be read says "native" here and fails, naming its problem, when loaded)."""
-    path = Path(spec_path) if spec_path is not None else HERE / f"{name}.yaml"
+def _field(path: Path, name: str, default: str) -> str:
+    """A word of a spec file's, read without validating it (a spec that cannot be read gives
+    `default` here and fails, naming its problem, when loaded)."""
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError):
-        return "native"
-    world = data.get("world", "native") if isinstance(data, dict) else "native"
-    return world if isinstance(world, str) else "native"
+        return default
+    value = data.get(name, default) if isinstance(data, dict) else default
+    return value if isinstance(value, str) else default
+
+
+def world_of(name: str, spec_path: str | Path | None = None) -> str:
+    """The world a referent's scenes happen in (its own spec's)."""
+    return _field(Path(spec_path) if spec_path is not None else HERE / f"{name}.yaml", "world", "native")
 
 
 def of_world(world: str) -> list[str]:
-    """The built-in referent types whose scenes are in `world`."""
+    """The built-in referent types whose own scenes are in `world`."""
     return [name for name in available() if world_of(name) == world]
+
+
+def _aliases(name: str) -> list[str]:
+    """The built-in types that are the axis `name` in a world of their own (libero_object's `axis: object`)."""
+    return [other for other in available() if _field(HERE / f"{other}.yaml", "axis", "") == name]
+
+
+def worlds_of(name: str) -> list[str]:
+    """The worlds that carry referent `name`: its own, those with a spec of it (IN_WORLDS/<world>/<name>.yaml),
+    and those of a type that is the same axis there."""
+    others = sorted(p.parent.name for p in IN_WORLDS.glob(f"*/{name}.yaml"))
+    return list(dict.fromkeys([world_of(name), *others, *(world_of(a) for a in _aliases(name))]))
+
+
+def spec_file(name: str, world: str | None = None) -> Path:
+    """The built-in spec of referent `name` in `world` (default its own): referents/<name>.yaml, a spec
+    of the type for that world (IN_WORLDS/<world>/<name>.yaml: data only, the type's module designs
+    it), or the type that is that axis there (`referent=object world=libero_object` is libero_object)."""
+    if name not in available():
+        raise UnknownReferent(f"unknown referent {name!r}; available: {', '.join(available())}")
+    if world is None or world == world_of(name):
+        return HERE / f"{name}.yaml"
+    there = IN_WORLDS / world / f"{name}.yaml"
+    if there.is_file():
+        return there
+    alias = [a for a in _aliases(name) if world_of(a) == world]
+    if alias:
+        return HERE / f"{alias[0]}.yaml"
+    carriers = ", ".join(worlds_of(name))
+    raise UnknownReferent(f"referent {name} has no design in world {world}; worlds that carry {name}: {carriers}")
 
 
 def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:
@@ -140,16 +185,16 @@ def _held_out(config: ReferentConfig, exc: ReferentSpecError) -> ReferentSpecErr
     return config.fail("holdout", f"without {', '.join(config.holdout)} the spec no longer holds: {problem}")
 
 
-def load(name: str, spec_path: str | None = None, overrides: dict[str, Any] | None = None) -> Referent:
-    """The referent `name` (referents/<name>.yaml), or the spec file at `spec_path` (whose type's
-    module may stand beside it).
+def load(
+    name: str, spec_path: str | Path | None = None, overrides: dict[str, Any] | None = None, world: str | None = None
+) -> Referent:
+    """The referent `name` in `world` (default its own; see `spec_path`), or the spec file at
+    `spec_path` (whose type's module may stand beside it).
 
     `overrides` replace top-level spec fields (e.g. objects_per_scene, holdout, confound).
     """
     if spec_path is None:
-        if name not in available():
-            raise UnknownReferent(f"unknown referent {name!r}; available: {', '.join(available())}")
-        path = HERE / f"{name}.yaml"
+        path = spec_file(name, world)
     else:
         path = Path(spec_path)
         if not path.is_file():

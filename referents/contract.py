@@ -26,6 +26,7 @@ from core import worlds
 from core.demo import Plan, Skills
 from core.spec import EpisodeSpec, TaskSpec
 from core.worlds.libero import Problem
+from referents import destination
 from referents.balance import Balance
 from referents.design import Design
 from referents.features import Alternative, object_alternatives
@@ -33,8 +34,15 @@ from referents.schema import CONFOUNDS, ReferentConfig, ReferentSpecError
 
 
 def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
+    """Grasp the target and lift it; where the world carries it somewhere (a container, see
+    referents/destination.py), lift it less and put it there."""
     skills.grasp(spec.target)
-    skills.lift()
+    destination = spec.task.params.get("destination")
+    if destination is None:
+        skills.lift()
+        return
+    skills.lift(0.1)
+    skills.place(destination)
 
 
 def _the_target(spec: EpisodeSpec) -> str:
@@ -82,6 +90,9 @@ class TypeModule:
             pairs = [tuple(entry) for entry in self.assets(cfg)]
         except TypeError:
             raise cfg.fail("assets", f"must be (kind, count) pairs {where}") from None
+        held = destination.container(cfg)
+        if held is not None and held.kind not in {kind for kind, *_ in pairs}:
+            pairs.append((held.kind, 1))
         for pair in pairs:
             if len(pair) != 2 or not isinstance(pair[1], int) or pair[1] < 1:
                 raise cfg.fail("assets", f"{pair!r} is not a (kind, count >= 1) pair {where}")

@@ -1,8 +1,10 @@
 """LIBERO-Object's object axis: the named grocery goes into the basket (see libero_object.yaml).
 
 The groceries are chosen, placed and named as in the object referent (every grocery the target
-and a distractor in every region equally often), in the layout's grocery slots; the basket, the
-spec's `container`, stands in the last slot of every scene. Only groceries are alternatives.
+and a distractor in every region equally often); the basket, the spec's `container`, stands in
+the last slot of every scene and every target is carried into it (referents/destination.py:
+alternatives, assets and the oracle's plan are the defaults). What is LIBERO-Object's own is here:
+its tasks' scenes (`canonical`) and what a policy that learnt its layouts does (`shortcut`).
 """
 
 from __future__ import annotations
@@ -12,21 +14,22 @@ from dataclasses import replace
 import numpy as np
 
 from core import worlds
-from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from core.worlds import libero
+from referents import destination
 from referents.balance import Balance
-from referents.compose import naming_design, slug
+from referents.compose import naming_design
 from referents.design import Design, Placement
-from referents.features import Alternative, object_alternatives
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
 
 
 def _container(cfg: ReferentConfig) -> Candidate:
-    field = cfg.need("container", dict)
-    return Candidate(str(field.get("kind")), str(field.get("name")), role="container")
+    held = destination.container(cfg)
+    if held is None:
+        raise cfg.fail(destination.FIELD, "missing field (where every grocery goes)")
+    return held
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -38,26 +41,7 @@ def validate(cfg: ReferentConfig) -> None:
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
-    groceries = naming_design(cfg, balance, slots=range(cfg.objects_per_scene))
-    container = _container(cfg)
-    basket = Placement(slug(container.name), container, len(cfg.layout.slots) - 1)
-    task = replace(cfg.task, params={**cfg.task.params, "destination": basket.id})
-    return replace(groceries, placements=(*groceries.placements, basket), task=task)
-
-
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.grasp(spec.target)
-    skills.lift(0.1)
-    skills.place(spec.task.params["destination"])
-
-
-def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
-    destination = spec.task.params.get("destination")
-    return object_alternatives(cfg, spec, [o.id for o in spec.objects if o.id != destination])
-
-
-def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
-    return [*ReferentConfig.assets(cfg), (_container(cfg).kind, 1)]
+    return naming_design(cfg, balance)
 
 
 def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:

@@ -22,7 +22,6 @@ from core.worlds import libero
 from referents.balance import Balance
 from referents.design import Design, Placement
 from referents.features import POSITION, Alternative, Feature, object_alternatives
-from referents.libero_object import demo as demo  # LIBERO's plan: the target onto params.destination
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)

@@ -20,6 +20,8 @@ def validate(cfg: ReferentConfig) -> None:
     lengths = cfg.need("row_lengths", list)
     ordinals = cfg.need("ordinals", list)
     columns = _columns(cfg)
+    if columns < 2:
+        raise cfg.fail("columns", f"a row needs two or more places, got {columns}")
     if len(cfg.layout.slots) % columns:
         raise cfg.fail("layout.slots", f"must hold whole rows of {columns} places")
     if not lengths or min(lengths) < 2 or max(lengths) > min(columns, len(ordinals), cfg.objects_per_scene):

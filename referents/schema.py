@@ -274,6 +274,8 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
         if any(len(slot) not in (2, 3) for slot in slots):
             raise ValueError("a slot is [x, y] or [x, y, z]")
         yaw = tuple(float(v) for v in raw.get("yaw", (-np.pi, np.pi)))
+        if len(yaw) != 2 or yaw[0] > yaw[1]:
+            raise ValueError("yaw is [min, max]")
         jitter = raw.get("jitter", 0.02)
         jitter = tuple(float(j) for j in jitter) if isinstance(jitter, list) else float(jitter)
         if isinstance(jitter, tuple) and len(jitter) != len(slots):

@@ -9,6 +9,9 @@ Commands (the request is JSON; what comes back is written to <out>):
 * `render` — {"suite", "size", "cases": [[task, state], ...]}: LIBERO's `OffScreenRenderEnv` at
   each of its own initial states; <out> (.npz) gets `<task>-<state>-agentview` and
   `-eye_in_hand` frames as LIBERO returns them (robosuite's raw, upside-down OpenGL frames),
+  `-agentview-labels` and `-eye_in_hand-labels` (the object or fixture each pixel of that frame
+  shows: MuJoCo's segmentation render, as indices into `-things`, LIBERO's instance names of the
+  objects and then the fixtures, -1 for anything else; `named` turns them into names),
   `-objects` ([instance, x, y, z] rows of every object's body position) and `-fixtures` (each
   fixture's body pose, which LIBERO draws anew at every reset).
 * `replay` — {"episodes": [{"objects": [{"instance", "kind", "pos", "quat"}], "target",
@@ -83,6 +86,57 @@ def _fixtures(env) -> list[list]:  # noqa: ANN001
     return [[name, *map(float, model.body_pos[b]), *map(float, model.body_quat[b])] for name, b in bodies.items()]
 
 
+def _labels(env, camera: str, size: int, things: list[str]) -> np.ndarray:  # noqa: ANN001
+    """Which of `things` (LIBERO's instance names) each pixel of a camera's frame shows, as an index
+    into them (-1: the robot, the arena, nothing), in the frame's own orientation: the picture
+    tests judge each thing inside its own pixels."""
+    import mujoco
+
+    model = env.sim.model._model
+    objects = {**env.env.objects_dict, **env.env.fixtures_dict}
+    roots = {model.body(objects[name].root_body).id: i for i, name in enumerate(things)}
+    of_geom = np.array([roots.get(int(model.body_rootid[model.geom_bodyid[g]]), -1) for g in range(model.ngeom)] + [-1], np.int8)
+    seg = env.sim.render(width=size, height=size, camera_name=camera, segmentation=True)  # (objtype, objid) per pixel
+    return of_geom[np.where(seg[..., 0] == mujoco.mjtObj.mjOBJ_GEOM, seg[..., 1], -1)]
+
+
+def named(labels: np.ndarray, things: np.ndarray) -> np.ndarray:
+    """`render`'s label image as names ('' for none), as object_differences takes them."""
+    return np.append(things, "")[labels]
+
+
+MIN_PIXELS = 20  # fewer, and a thing's figure is a few pixels' noise
+
+
+def object_differences(
+    ours: np.ndarray, theirs: np.ndarray, our_labels: np.ndarray, their_labels: np.ndarray, erode: int = 2
+) -> dict[str, float]:
+    """Mean absolute difference (of 255) of two frames inside each object's and fixture's pixels
+    (`*_labels`: the name each pixel shows: `named` of what `render` writes), where both frames show it,
+    each mask eroded by `erode` px: a whole-frame mean hides a wrongly drawn object, and its
+    edges (anti-aliased in LIBERO's frames, not in ours) would only measure aliasing. Things with
+    fewer than MIN_PIXELS such pixels are left out."""
+    out = {}
+    for name in sorted(set(np.unique(their_labels)) - {""}):
+        mask = _eroded(our_labels == name, erode) & _eroded(their_labels == name, erode)
+        if mask.sum() >= MIN_PIXELS:
+            out[str(name)] = float(np.abs(ours[mask].astype(int) - theirs[mask].astype(int)).mean())
+    return out
+
+
+def _eroded(mask: np.ndarray, steps: int) -> np.ndarray:
+    """The pixels of `mask` at least `steps` px (4-connected) inside it."""
+    for _ in range(steps):
+        inner = mask.copy()
+        inner[1:] &= mask[:-1]
+        inner[:-1] &= mask[1:]
+        inner[:, 1:] &= mask[:, :-1]
+        inner[:, :-1] &= mask[:, 1:]
+        inner[0] = inner[-1] = inner[:, 0] = inner[:, -1] = False
+        mask = inner
+    return mask
+
+
 def render(request: dict, out: str) -> None:
     arrays = {}
     by_task: dict[int, list[int]] = {}
@@ -94,8 +148,11 @@ def render(request: dict, out: str) -> None:
         initial = bench.get_task_init_states(task)
         for state in states:
             obs = env.set_init_state(initial[state])
+            things = [*env.env.objects_dict, *env.env.fixtures_dict]
+            arrays[f"{task}-{state}-things"] = np.array(things)
             for cam in CAMERAS:
                 arrays[f"{task}-{state}-{cam}"] = obs[f"{cam}_image"]
+                arrays[f"{task}-{state}-{cam}-labels"] = _labels(env, cam, request["size"], things)
             arrays[f"{task}-{state}-objects"] = np.array(_positions(env), dtype=object)
             arrays[f"{task}-{state}-fixtures"] = np.array(_fixtures(env), dtype=object)
         env.close()

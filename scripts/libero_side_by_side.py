@@ -8,8 +8,6 @@ the mean absolute difference of each pair printed under it.
 
 from __future__ import annotations
 
-import json
-import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -19,6 +17,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
 from gen.cli import UserError, main  # noqa: E402
 
@@ -32,36 +31,18 @@ class SideBySideOptions:
 
 
 def picture(options: SideBySideOptions) -> None:
+    from libero_objects_side_by_side import liberos_frames, our_frames
     from PIL import Image, ImageDraw
 
-    import referents
-    from core import worlds
     from core.layout import LIBERO
-    from core.worlds import libero
-    from gen.canonical import load_state
-    from gen.plan import default_sim
-    from oracle.render import Cameras
-    from oracle.scene import scene_for
 
     if not (0 <= options.task < 10 and 0 <= options.state < 50):
         raise UserError(f"task must be in 0..9 and state in 0..49, got {options.task} and {options.state}")
-    size = LIBERO.image_size
+    size, cases = LIBERO.image_size, [[options.task, options.state]]
     with tempfile.TemporaryDirectory() as tmp:
-        request = Path(tmp) / "request.json"
-        request.write_text(json.dumps({"suite": options.world, "size": size, "cases": [[options.task, options.state]]}))
-        reference = ROOT / ".venv-libero" / "bin" / "python"
-        script = ROOT / "scripts" / "libero_reference.py"
-        subprocess.run([str(reference), str(script), "render", str(request), f"{tmp}/f.npz"], check=True, capture_output=True)
-        theirs = np.load(f"{tmp}/f.npz", allow_pickle=True)
-        world, referent = worlds.world(options.world), referents.load(options.world)
-        scene = scene_for(referent.assets(), "libero", world.name)
-        for name, *pose in theirs[f"{options.task}-{options.state}-fixtures"].tolist():  # LIBERO draws these at each reset
-            body = scene.model.body(f"{name}_main").id
-            scene.model.body_pos[body], scene.model.body_quat[body] = pose[:3], pose[3:]
-        load_state(scene, referent, world, libero.tasks(world.suite)[options.task], options.state, default_sim(referent))
-        cameras = Cameras(scene, size, LIBERO.camera_names)
-        ours = {c: f.copy() for c, f in cameras.render().items()}
-        cameras.close()
+        theirs = np.load(liberos_frames(options.world, cases, Path(tmp) / "f.npz"), allow_pickle=True)
+        frames = our_frames(options.world, cases, theirs, labels=False)
+    ours = {c: frames[f"{options.task}-{options.state}-{c}"] for c in LIBERO.cameras}
     sheet = Image.new("RGB", (4 * size, size + 40), "white")
     draw = ImageDraw.Draw(sheet)
     for i, (camera, model_camera) in enumerate(LIBERO.cameras.items()):

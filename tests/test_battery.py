@@ -65,8 +65,10 @@ def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pyt
         make_dataset(tmp_path_factory.mktemp("exam40") / "object-exam", "referent=object", "n=40", "split=exam", "seed=3")
     )
     out = tmp_path_factory.mktemp("runs")
+    first = exam.trials[exam.trials["trial"] < 5]  # `nothing` runs every row to its horizon: a few trials show its zeros
     reports = {
-        p: take(exam, exam.trials, make(p), out / p, workers=2, policy_name=p)[0] for p in ("position", "oracle", "nothing")
+        p: take(exam, exam.trials if p != "nothing" else first, make(p), out / p, workers=2, policy_name=p)[0]
+        for p in ("position", "oracle", "nothing")
     }
     oracle, position, nothing = reports["oracle"]["faces"], reports["position"]["faces"], reports["nothing"]["faces"]
     assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["true_target"]["rate"] <= 0.05

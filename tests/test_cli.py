@@ -47,7 +47,7 @@ def _untouched(out: Path) -> bool:
         (["objects_per_scene=1"], "objects_per_scene must be at least 2 (a swap needs another object), got 1"),
         (["holdout=[milk carton,soda can,bottle,bread,cereal box,lemon]"], "holdout: holds out every object"),
         (["referent=libero_object", "profile=native"], "world libero_object is recorded in profile libero only"),
-        (["referent=object", "world=libero_object"], "referent object's scenes are in world native, not libero_object"),
+        (["referent=color", "world=libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
         (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
         (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
     ],

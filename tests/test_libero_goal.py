@@ -24,14 +24,17 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import covered
 from gen.plan import default_sim, plan, world_sim
-from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.episode import demonstrate
 from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
+from oracle.skills import CARRY_MARGIN
 
 SUITE = "libero_goal"
-GOAL_REPLAYS = 18  # of 20 (19 when this was written, README): two left for another host's floating point
+# Things whose look our fast rendering cannot reach within helpers.OBJECT_BOUND (README): the stove's
+# mirror top (16/255 agentview) and the black bowl's decimated mesh (13/255 agentview).
+OWN_BOUNDS = {"flat_stove": 17.0, "akita_black_bowl": 14.0}
 ASSETS = (("akita_black_bowl", 1), ("cream_cheese", 1), ("plate", 1), ("wine_bottle", 1))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
@@ -75,7 +78,8 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
 
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path, world: worlds.World) -> None:
     """LIBERO-Goal's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as LIBERO
-    drew them: both cameras within 4/255 mean absolute difference; every object within 1 mm."""
+    drew them: both cameras within 4/255 mean absolute difference, and within 12/255 inside each
+    object's and fixture's own pixels (helpers.Pictures); every object within 1 mm."""
     size = LIBERO.image_size
     cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
     theirs = np.load(
@@ -83,7 +87,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
     )
     scene = scene_for(ASSETS, "libero", SUITE)
     cameras = Cameras(scene, size, LIBERO.camera_names)
-    m, worst, farthest = scene.model, dict.fromkeys(LIBERO.cameras, 0.0), 0.0
+    m, pictures, farthest = scene.model, Pictures(), 0.0
     kept = {
         f.name: (m.body_pos[m.body(f"{f.name}_main").id].copy(), m.body_quat[m.body(f"{f.name}_main").id].copy())
         for f in world.fixtures
@@ -94,10 +98,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
                 body = m.body(f"{name}_main").id
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
             _load(scene, world, t, s)
-            frames = cameras.render()
-            for camera, model_camera in LIBERO.cameras.items():
-                reference = theirs[f"{t}-{s}-{model_camera}"][::-1, ::-1]
-                worst[camera] = max(worst[camera], float(np.abs(frames[camera].astype(int) - reference.astype(int)).mean()))
+            pictures.compare(cameras, theirs, t, s)
             ours = scene.positions()
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))
@@ -105,8 +106,8 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
         for name, (pos, quat) in kept.items():
             m.body_pos[m.body(f"{name}_main").id], m.body_quat[m.body(f"{name}_main").id] = pos, quat
         cameras.close()
-    print(f"worst mean absolute difference per camera (of 255): {worst}; farthest object {farthest * 1000:.3f} mm")
-    assert max(worst.values()) <= 4.0, f"mean absolute difference per camera (of 255): {worst}"
+    print(f"farthest object {farthest * 1000:.3f} mm")
+    pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 
 
@@ -128,10 +129,33 @@ def test_a_bowl_beside_the_stove_is_taken_from_a_side_clear_of_it(world: worlds.
     assert demonstrate(scene, ArmIK(np.asarray(sim.robot_home), sim.world), spec, referent.demo).success
 
 
+def test_the_hand_carries_the_cheese_a_margin_clear_of_the_standing_bottle() -> None:
+    """`n=10 seed=7`'s episode 5 carries the cream cheese to the plate, the upright wine bottle
+    standing on the way 12.8 cm from it: the hand rose past the bottle on a diagonal and came down
+    on one, 6 mm from it in our simulation, and in LIBERO's own struck it and dropped the cheese
+    off the plate (issue 29). Now, all the while the cheese is carried, the hand and the cheese
+    keep CARRY_MARGIN from the bottle."""
+    referent = referents.load(SUITE)
+    sim = default_sim(referent)
+    spec = plan(referent, 10, 7, sim)[5]
+    cheese, bottle = spec.task.params["object"], next(o.id for o in spec.objects if o.kind == "wine_bottle")
+    assert spec.object(cheese).kind == "cream_cheese" and spec.object(spec.target).kind == "plate"
+    scene = scene_for(referent.assets(), sim.profile, SUITE)
+    demo = demonstrate(scene, ArmIK(np.asarray(sim.robot_home), sim.world), spec, referent.demo)
+    assert demo.success
+    gaps = []
+    for state in demo.states:
+        scene.set_physics_state(state)
+        if scene.object_pos(cheese)[2] > spec.object(cheese).pos[2] + 0.02:  # off the table: carried
+            gaps.append(scene.hand_gap([scene.data.qpos[scene.arm_qpos]], cheese, [bottle], 0.1))
+    print(f"closest the carrying hand came to the bottle: {min(gaps) * 1000:.1f} mm")
+    assert len(gaps) > 20 and min(gaps) >= CARRY_MARGIN, f"the hand passed {min(gaps) * 1000:.1f} mm from the bottle"
+
+
 @pytest.fixture(scope="module")
 def goal_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp(SUITE) / "data"
-    return make_dataset(root, f"referent={SUITE}", "n=20", "image_size=64", "seed=1")
+    return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
 def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path, world: worlds.World, tmp_path: Path) -> None:
@@ -141,12 +165,12 @@ def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path,
     results = json.loads(liberos_own("replay", liberos_replay(goal_dataset, world), tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
-    assert len(results) == 20 and succeeded >= GOAL_REPLAYS, f"LIBERO's check_success() accepted {succeeded}/20"
+    assert len(results) == REPLAYS and succeeded >= 0.9 * REPLAYS, f"LIBERO's check_success() accepted {succeeded}/{REPLAYS}"
 
 
 def test_a_libero_goal_dataset_loads_and_the_audit_finds_no_leak(goal_dataset: Path) -> None:
     ds = LeRobotDataset(f"local/{SUITE}", root=goal_dataset)
-    assert ds.meta.total_episodes == 20
+    assert ds.meta.total_episodes == REPLAYS
     audit = json.loads((goal_dataset / "meta/audit.json").read_text())["written"]
     assert not audit["leaks"], audit["verdict"]
     instructions = scenes.read(goal_dataset)["instruction"].tolist()

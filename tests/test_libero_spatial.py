@@ -24,11 +24,15 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.plan import default_sim
-from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
 SUITE = "libero_spatial"
+# Things whose look our fast rendering cannot reach within helpers.OBJECT_BOUND (README): the stove's
+# mirror top, where LIBERO shows the robot and the bowls reflected (38/255 agentview), and the black
+# bowls' decimated meshes close to the wrist camera (19/255).
+OWN_BOUNDS = {"flat_stove": 40.0, "akita_black_bowl": 21.0}
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
@@ -82,7 +86,8 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
 ) -> None:
     """LIBERO-Spatial's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as
     LIBERO drew them for the picture: both cameras' frames against LIBERO's own (turned 180
-    degrees) at most 4/255 mean absolute difference per camera; every object within 1 mm."""
+    degrees) at most 4/255 mean absolute difference per camera, and 12/255 inside each object's
+    and fixture's own pixels (helpers.Pictures); every object within 1 mm."""
     size = LIBERO.image_size
     cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
     theirs = np.load(
@@ -91,15 +96,12 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     sim = default_sim(referent)
     scene = scene_for(referent.assets(), sim.profile, SUITE)
     cameras = Cameras(scene, size, LIBERO.camera_names)
-    worst, farthest = dict.fromkeys(LIBERO.cameras, 0.0), 0.0
+    pictures, farthest = Pictures(), 0.0
     try:
         for t, s in cases:
             kept = _fixture_poses(scene, theirs[f"{t}-{s}-fixtures"].tolist())
             spec = load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-            frames = cameras.render()
-            for camera, model_camera in LIBERO.cameras.items():
-                reference = theirs[f"{t}-{s}-{model_camera}"][::-1, ::-1]
-                worst[camera] = max(worst[camera], float(np.abs(frames[camera].astype(int) - reference.astype(int)).mean()))
+            pictures.compare(cameras, theirs, t, s)
             ours = scene.positions()
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))
@@ -108,27 +110,27 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
             assert {o.id for o in spec.objects} == set(libero.problem(SUITE, libero.tasks(SUITE)[t]).objects)
     finally:
         cameras.close()
-    print(f"worst mean absolute difference per camera (of 255): {worst}; farthest object {farthest * 1000:.3f} mm")
-    assert max(worst.values()) <= 4.0, f"mean absolute difference per camera (of 255): {worst}"
+    print(f"farthest object {farthest * 1000:.3f} mm")
+    pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 
 
 @pytest.fixture(scope="module")
 def spatial_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp(SUITE) / "data"
-    return make_dataset(root, f"referent={SUITE}", "n=20", "image_size=64", "seed=1")
+    return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
 def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Path, world: worlds.World, tmp_path: Path) -> None:
     """Each episode rebuilt in LIBERO-Spatial's own scene from its record alone (LIBERO's instance
     names, poses, robot joints; the fixtures where our world stands them), its recorded actions
-    stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts them: 20/20 when this
-    was written; the bound leaves two for another host's floating point (bowls on the stove rest
-    3 mm lower under the reference's MuJoCo 3.17 than under our 3.9: README)."""
+    stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts at least 90% (20/20 of
+    the README's 20 when this was written; bowls on the stove rest 3 mm lower under the reference's
+    MuJoCo 3.17 than under our 3.9: README)."""
     results = json.loads(liberos_own("replay", liberos_replay(spatial_dataset, world), tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
-    assert len(results) == 20 and succeeded >= 18, f"LIBERO's check_success() accepted {succeeded}/20"
+    assert len(results) == REPLAYS and succeeded >= 0.9 * REPLAYS, f"LIBERO's check_success() accepted {succeeded}/{REPLAYS}"
 
 
 def test_a_libero_spatial_dataset_loads_and_the_audit_finds_no_leak(spatial_dataset: Path) -> None:

@@ -25,11 +25,14 @@ from eval.registry import make
 from gen import scenes
 from gen.canonical import CanonicalOptions, build, load_state
 from gen.plan import default_sim
-from helpers import PICTURE_STATES, canonical_reports, liberos_own, liberos_replay, make_dataset
+from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
 
 SUITE = "libero_object"
+# Objects whose look our fast rendering cannot reach within helpers.OBJECT_BOUND (README): the basket's
+# weave is geometry that its 25,000 drawn triangles keep only in part (21/255 agentview, 26.5/255 wrist).
+OWN_BOUNDS = {"basket": 28.0}
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
@@ -66,7 +69,8 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     """LIBERO-Object's first initial states (PICTURE_STATES) of each of its 10 tasks: our frames of both cameras
     (stored mirrored, as the libero profile stores them) against LIBERO's own frames turned
     180 degrees (what lerobot's LiberoProcessorStep and openpi hand a policy): at most 4/255 mean
-    absolute difference per camera; every object within 1 mm of where LIBERO puts it."""
+    absolute difference per camera, and 12/255 inside each object's own pixels (helpers.Pictures);
+    every object within 1 mm of where LIBERO puts it."""
     size = LIBERO.image_size
     cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
     request = {"suite": SUITE, "size": size, "cases": cases}
@@ -74,18 +78,15 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     sim = default_sim(referent)
     scene = scene_for(referent.assets(), sim.profile, SUITE)
     cameras = Cameras(scene, size, LIBERO.camera_names)
-    worst, farthest = dict.fromkeys(LIBERO.cameras, 0.0), 0.0
+    pictures, farthest = Pictures(), 0.0
     for t, s in cases:
         load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-        frames = cameras.render()
-        for camera, model_camera in LIBERO.cameras.items():
-            reference = theirs[f"{t}-{s}-{model_camera}"][::-1, ::-1]
-            worst[camera] = max(worst[camera], float(np.abs(frames[camera].astype(int) - reference.astype(int)).mean()))
+        pictures.compare(cameras, theirs, t, s)
         ours = {world.body_name(body.kind.name, 0): np.asarray(pos) for body, pos in _bodies(scene)}
         for instance, *pos in theirs[f"{t}-{s}-objects"]:
             farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
     cameras.close()
-    assert max(worst.values()) <= 4.0, f"mean absolute difference per camera (of 255): {worst}"
+    pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 
 
@@ -97,7 +98,7 @@ def _bodies(scene) -> list:  # noqa: ANN001
 @pytest.fixture(scope="module")
 def libero_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("libero_object") / "data"
-    return make_dataset(root, f"referent={SUITE}", "n=20", "image_size=64", "seed=1")
+    return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
 def test_recorded_actions_succeed_in_liberos_own_environment(libero_dataset: Path, tmp_path: Path) -> None:
@@ -108,7 +109,7 @@ def test_recorded_actions_succeed_in_liberos_own_environment(libero_dataset: Pat
         liberos_own("replay", liberos_replay(libero_dataset, worlds.world(SUITE)), tmp_path / "replay.json").read_text()
     )
     succeeded = sum(r["success"] for r in results)
-    assert len(results) == 20 and succeeded >= 18, f"LIBERO's check_success() accepted {succeeded}/20"
+    assert len(results) == REPLAYS and succeeded >= 0.9 * REPLAYS, f"LIBERO's check_success() accepted {succeeded}/{REPLAYS}"
 
 
 def test_a_libero_object_dataset_is_liberos_features_and_scene(libero_dataset: Path) -> None:

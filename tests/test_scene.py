@@ -16,7 +16,7 @@ from core.worlds.native import TABLE_TOP_Z
 from gen.plan import plan
 from helpers import visible_bodies
 from oracle.render import Cameras
-from oracle.scene import Scene, scene_for
+from oracle.scene import Scene, _hull_distance, scene_for
 
 
 @pytest.fixture(scope="module")
@@ -152,3 +152,13 @@ def test_large_textures_are_halved_by_two_by_two_averages(tmp_path: Path, monkey
     assert small.shape == (2, 4, 3)
     assert np.abs(small - expected).max() <= 1.0  # each halving rounds once
     assert halved(str(tmp_path / "big.png"), side=16) == tmp_path / "big.png"  # small enough: the file itself
+
+
+def test_hull_distance_is_between_the_hulls_not_their_points() -> None:
+    """hand_gap's distance: between two crossing rods 5 cm apart it is 5 cm, though their end
+    points are a metre apart; between cubes, face to face; 0 where they overlap."""
+    rod = np.array([[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]])
+    assert _hull_distance(rod + [0.0, 0.0, 0.05], rod[:, [1, 0, 2]]) == pytest.approx(0.05, abs=1e-6)
+    cube = 0.01 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    assert _hull_distance(cube, cube + [0.05, 0.01, 0.0]) == pytest.approx(0.03, abs=1e-6)
+    assert _hull_distance(cube, cube + [0.015, 0.0, 0.0]) == pytest.approx(0.0, abs=1e-6)

@@ -52,11 +52,14 @@ class Camera:
 class Fixture:
     """Furniture a world's scenes stand on or beside (a cabinet, a stove): a model file (under the
     world's assets), no free joint; `joints` are its inner ones (drawers, a knob), by their names in
-    the model file."""
+    the model file. `mirror` names a drawn box whose top LIBERO renders as a mirror (reflectance):
+    our fast settings draw no reflections, so the scene builder lays a plate over it that looks,
+    from the fixed agentview camera, as that mirror does (oracle/scene.py)."""
 
     kind: str
     xml: str
     joints: tuple[str, ...] = ()
+    mirror: str = ""
 
 
 @dataclass(frozen=True)

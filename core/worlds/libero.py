@@ -33,9 +33,11 @@ HALF = float(np.sqrt(0.5))
 FINGER_HOME, FINGER_TARGET = 0.020833, 0.02
 
 
-def _scanned(name: str, size: tuple[float, float, float], bottom: float, **fields: object) -> Kind:
-    """A Google Scanned Object of LIBERO's (stable_scanned_objects), resting turned a quarter about z."""
-    return Kind(name, "libero", size, bottom, params={"xml": f"stable_scanned_objects/{name}/{name}.xml"}, quat=QUARTER, **fields)  # type: ignore[arg-type]
+def _scanned(name: str, size: tuple[float, float, float], bottom: float, faces: int = 0, **fields: object) -> Kind:
+    """A Google Scanned Object of LIBERO's (stable_scanned_objects), resting turned a quarter about z;
+    `faces`: its drawn mesh's triangles where not oracle/meshes.py's default."""
+    params: dict = {"xml": f"stable_scanned_objects/{name}/{name}.xml"} | ({"faces": faces} if faces else {})
+    return Kind(name, "libero", size, bottom, params=params, quat=QUARTER, **fields)  # type: ignore[arg-type]
 
 
 def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface: float, inner: float) -> Kind:
@@ -47,9 +49,13 @@ def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface:
     return Kind(name, "site", (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
 
 
-def _hope(name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y") -> Kind:
-    """A grocery from LIBERO's HOPE set (stable_hope_objects)."""
-    return Kind(name, "libero", size, bottom, grasp, params={"xml": f"stable_hope_objects/{name}/{name}.xml"}, quat=quat)
+def _hope(
+    name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y", faces: int = 2000
+) -> Kind:
+    """A grocery from LIBERO's HOPE set (stable_hope_objects), its drawn mesh cut to `faces`
+    triangles: 2,000 look as LIBERO's within 4/255 and leave LIBERO-Object's basket more (below)."""
+    xml = f"stable_hope_objects/{name}/{name}.xml"
+    return Kind(name, "libero", size, bottom, grasp, params={"xml": xml, "faces": faces}, quat=quat)
 
 
 UPRIGHT_BOX = (0.5, 0.5, 0.5, 0.5)  # the cartons and bottles: y-up meshes stood on their base
@@ -74,8 +80,9 @@ KINDS: dict[str, Kind] = {
             "libero",
             (0.1573, 0.1695, 0.1415),
             -0.0042,
-            # its weave is geometry: decimated less than the groceries (oracle/meshes.py)
-            params={"xml": "stable_scanned_objects/basket/basket.xml", "faces": 15000},
+            # its weave is geometry: decimated less than the groceries (oracle/meshes.py); at 25,000
+            # triangles 21/255 (agentview) and 27/255 (wrist) from LIBERO's inside its pixels, 28 and 32 at 15,000
+            params={"xml": "stable_scanned_objects/basket/basket.xml", "faces": 25000},
             quat=(HALF, 0.0, 0.0, HALF),
             # LIBERO's `contain_region` site: `In(x, basket_1_contain_region)` is x's origin inside this box
             contain=((0.0, 0.0, 0.07185), (0.06108, 0.06108, 0.06949)),
@@ -83,9 +90,11 @@ KINDS: dict[str, Kind] = {
         # LIBERO-Spatial's table: the bowls are picked by the rim (`rim`: the wall's distance from the
         # centre), the plate is where they go (LIBERO's `On` wants the bowl's origin within 3 cm of its)
         _scanned("akita_black_bowl", (0.1070, 0.1072, 0.0505), -0.0016, rim=0.0445, inner=0.03),
-        _scanned("glazed_rim_porcelain_ramekin", (0.0891, 0.0893, 0.0420), -0.0007),
+        # the ramekin's walls need more triangles than the default to look as LIBERO's (12 -> 10/255
+        # inside its pixels); the flat cookie box needs fewer, and pays for them
+        _scanned("glazed_rim_porcelain_ramekin", (0.0891, 0.0893, 0.0420), -0.0007, faces=5000),
         _scanned("plate", (0.1375, 0.1376, 0.0189), 0.0025, inner=0.03),
-        _hope("cookies", (0.0826, 0.0621, 0.0188), 0.0094, QUARTER),
+        _hope("cookies", (0.0826, 0.0621, 0.0188), 0.0094, QUARTER, faces=1500),
         # LIBERO-Goal's places on its furniture: the stove's burner (a bowl settles on it 2.2 cm above
         # the site) and the cabinet's top
         _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
@@ -109,7 +118,7 @@ FIXTURES: dict[str, Fixture] = {
     f.kind: f
     for f in (
         Fixture("wooden_cabinet", "articulated_objects/wooden_cabinet.xml", ("top_level", "middle_level", "bottom_level")),
-        Fixture("flat_stove", "articulated_objects/flat_stove.xml", ("button",)),
+        Fixture("flat_stove", "articulated_objects/flat_stove.xml", ("button",), mirror="base_vis"),
         Fixture("wine_rack", "turbosquid_objects/wine_rack/wine_rack.xml"),
     )
 }

@@ -29,8 +29,9 @@ WORLD = replace(
         Placed(libero.FIXTURES["wine_rack"], "wine_rack_1", (-0.26, -0.26, 0.92), HALF_TURN),
     ),
     suite=SUITE,
-    # the Panda's meshes as decimated as elsewhere would put this scene's frames at 4.06/255 from
-    # LIBERO's (its reflective stove top, which the fast settings do not mirror, takes 2 of them)
+    # the Panda's meshes as decimated as elsewhere put this scene's frames at 4.06/255 from LIBERO's
+    # when its mirror stove top, which the fast settings do not reflect, took 2 of them (measured
+    # before the stove's agentview plate, oracle/scene.py, brought the frames to 2.40)
     robot_faces=2000,
     episode_steps=300,  # lerobot's envs/libero.py: libero_goal's max_episode_steps
 )

@@ -1,0 +1,182 @@
+"""One dataset, many axes: `referent=[a,b,c]` writes one LeRobot dataset whose episodes take
+turns among the types (n/k each), every type audited on its own, so that lerobot's own trainer,
+which reads one dataset, fits one policy (and one LoRA) on every axis at once."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from lerobot.datasets.lerobot_dataset import LeRobotDataset  # lerobot's own loader, before any GL context
+
+from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from gen import scenes
+from gen.cli import main
+from gen.config import GenConfig, parse
+from gen.plan import plan_and_audit
+from helpers import make_dataset
+
+TYPES = ("libero_object", "libero_spatial", "libero_goal")
+MIXED = f"referent=[{','.join(TYPES)}]"
+ARGS = (MIXED, "n=3", "image_size=64", "seed=2", "workers=1")
+FILES = (
+    "data/chunk-000/file-000.parquet",
+    "meta/scenes.parquet",
+    "meta/episodes/chunk-000/file-000.parquet",
+    "meta/tasks.parquet",
+    "meta/stats.json",
+    "meta/info.json",
+    "meta/audit.json",
+    "README.md",
+    *(f"videos/{key}/chunk-000/file-000.mp4" for key in LIBERO.image_keys),
+)
+
+
+def _gen(*args: str, crash: str | None = None) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, **({"DECONFOUND_CRASH_AT": crash} if crash else {})}
+    return subprocess.run([sys.executable, "-m", "gen", *ARGS, *args], capture_output=True, text=True, env=env)
+
+
+@pytest.fixture(scope="module")
+def mixed(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("mixed") / "ds"
+    done = _gen(f"out={out}")
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out
+
+
+def test_a_mix_is_one_lerobot_dataset_whose_episodes_take_turns(mixed: Path) -> None:
+    ds = LeRobotDataset("local/mixed", root=mixed)
+    assert ds.num_episodes == 3 and set(ds.meta.features) >= {*LIBERO.image_keys, STATE_KEY, ACTION_KEY}
+    records = scenes.read(mixed)
+    assert list(records["referent"]) == list(TYPES) and list(records["world"]) == list(TYPES)
+    assert [json.loads(scene)["world"] for scene in records["scene"]] == list(TYPES)
+    for ep in range(3):
+        item = ds[ds.meta.episodes[ep]["dataset_from_index"]]
+        assert item["task"] == records["instruction"][ep]
+        assert tuple(item["observation.images.image"].shape) == (3, 64, 64)
+    generation = json.loads((mixed / "meta/generation.json").read_text())
+    assert generation["config"]["referent"] == list(TYPES) and sorted(generation["referent_spec"]) == sorted(TYPES)
+    check = subprocess.run([sys.executable, "-m", "gen.check", str(mixed)], capture_output=True, text=True)
+    assert check.returncode == 0, check.stderr
+    doctor = Path(sys.executable).with_name("lerobot-doctor")
+    report = json.loads(subprocess.run([str(doctor), "check", str(mixed), "--json"], capture_output=True, text=True).stdout)
+    assert not [m for c in report["checks"] for m in c["messages"] if m["severity"] == "FAIL"]
+    assert report["overall_severity"] in ("PASS", "WARN")
+
+
+def test_every_type_has_its_own_audit_and_card_section(mixed: Path) -> None:
+    audits = json.loads((mixed / "meta/audit.json").read_text())["referents"]
+    assert list(audits) == list(TYPES)
+    for name, record in audits.items():
+        assert record["agree"] and record["written"]["referent"] == name and not record["written"]["leaks"]
+        assert record["written"]["episodes"] == 1
+    card = (mixed / "README.md").read_text()
+    for name in TYPES:
+        assert f"## `{name}` (world {name})" in card and f"- referent-{name}" in card
+        assert f"python -m gen referent={name} image_size=64 fps=20 profile=libero n=200 seed=3 split=exam" in card
+    assert "python -m gen 'referent=[libero_object,libero_spatial,libero_goal]' n=3 seed=2 image_size=64" in card
+
+
+def test_verify_regenerates_each_type_from_its_spec(mixed: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "gen.verify", str(mixed), "episodes=3"], capture_output=True, text=True)
+    assert done.returncode == 0 and "episodes [0, 1, 2] regenerate identically" in done.stdout, done.stderr[-2000:]
+
+
+def _lerobot_train(out: Path, dataset: Path, **policy: object) -> Path:
+    """`lerobot-train` offline on CPU for 2 steps; the pretrained_model folder it saves."""
+    args = {
+        "dataset.repo_id": "local/mixed",
+        "dataset.root": dataset,
+        **{f"policy.{k}": v for k, v in policy.items()},
+        "policy.device": "cpu",
+        "policy.push_to_hub": "false",
+        "steps": 2,
+        "batch_size": 2,
+        "num_workers": 0,
+        "save_freq": 2,
+        "eval_freq": 0,
+        "wandb.enable": "false",
+        "output_dir": out,
+    }
+    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    train = [str(Path(sys.executable).parent / "lerobot-train"), *(f"--{k}={v}" for k, v in args.items())]
+    peft = ["--peft.method_type=LORA", "--peft.r=8", '--peft.target_modules=["linear1","linear2"]'] if "path" in policy else []
+    done = subprocess.run([*train, *peft], capture_output=True, text=True, env=env, cwd=out.parent)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out / "checkpoints" / "000002" / "pretrained_model"
+
+
+def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path: Path) -> None:
+    act = _lerobot_train(
+        tmp_path / "act",
+        mixed,
+        type="act",
+        pretrained_backbone_weights="null",  # ImageNet weights would be downloaded
+        dim_model=64,
+        dim_feedforward=128,
+        chunk_size=10,
+        n_action_steps=10,
+    )
+    assert (act / "model.safetensors").is_file()
+    lora = _lerobot_train(tmp_path / "lora", mixed, path=act)
+    assert (lora / "adapter_config.json").is_file() and json.loads((lora / "config.json").read_text())["use_peft"]
+
+
+def test_a_killed_mix_resumes_to_the_same_bytes(mixed: Path, tmp_path: Path) -> None:
+    out = tmp_path / "ds"
+    assert _gen(f"out={out}", crash="episode:1").returncode == -9
+    assert not out.exists()
+    resumed = _gen(f"out={out}", "resume=true")
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    for rel in FILES:
+        assert (out / rel).read_bytes() == (mixed / rel).read_bytes(), rel
+
+
+def test_a_mix_of_native_types(tmp_path: Path) -> None:
+    out = make_dataset(tmp_path / "native", "referent=[object,color]", "n=2", "image_size=32", "seed=1", "workers=1")
+    records = scenes.read(out)
+    assert list(records["referent"]) == ["object", "color"] and list(records["world"]) == ["native", "native"]
+    assert LeRobotDataset("local/native", root=out).num_episodes == 2
+    assert list(json.loads((out / "meta/audit.json").read_text())["referents"]) == ["object", "color"]
+
+
+@pytest.mark.fast
+def test_a_mixed_plan_holds_each_types_own_plan_in_turns(tmp_path: Path) -> None:
+    """Each type's episodes have the roles its own plan of n/k draws with the same seed, every type
+    taking its turn, and each type's audit (20 episodes each) finds no leak."""
+    mixed = plan_and_audit(parse(["referent=[object,color,category]", "n=60", f"out={tmp_path / 'mix'}"]))
+    assert [spec.referent for spec in mixed.specs[:6]] == ["object", "color", "category"] * 2
+    for place, share in enumerate(mixed.shares):
+        alone = plan_and_audit(parse([f"referent={share.referent.name}", "n=20", f"out={tmp_path / 'one'}"]))
+        assert mixed.designs[place::3] == alone.designs
+        assert share.audit["verdict"] == "no leak"
+
+
+@pytest.mark.fast
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["referent=[object,unicorn]", "n=2"], "unknown referent 'unicorn'"),
+        (["referent=[object,color,object]", "n=3"], "referent=[object,color,object] names object 2 times: name each type once"),
+        ([MIXED, "n=4"], f"n=4 cannot be shared equally by the 3 types of {MIXED}: give n=3"),
+        (["referent=[object,color]", "n=3"], "give n=2 or n=4"),
+        (["referent=[object,libero_object]", "n=2"], "object records profile native"),
+        (["referent=[]"], "referent=[] names no referent type"),
+        ([MIXED, "n=3", "split=exam"], "split=exam makes one exam per referent type"),
+    ],
+)
+def test_bad_lists_are_refused_in_one_line(
+    argv: list[str], needle: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from gen.__main__ import generate
+
+    out = tmp_path / "out"
+    assert main("python -m gen", GenConfig, generate, [*argv, f"out={out}"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], lines
+    assert not out.exists()
