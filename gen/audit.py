@@ -9,8 +9,9 @@ the number of alternatives). A variable leaks when the lower end of a one-sided 
 bound, Bonferroni-corrected for the number of variables audited, exceeds chance by more than
 LEAK_MARGIN. Below MIN_EPISODES a plan is too small for any verdict and none is given. A leak
 is expected when the options asked for it: `confound=position` for variables of the POSITION
-family, a vocabulary restriction (distractor_only, targets) for the IDENTITY family; each
-variable declares its families where the referent makes it (referents/features.py).
+family, `confound=layout` for both families, a vocabulary restriction (distractor_only, targets)
+for the IDENTITY family; each variable declares its families where the referent makes it
+(referents/features.py).
 """
 
 from __future__ import annotations
@@ -69,6 +70,8 @@ def expected_leaks(referent: Referent) -> Family:
     families = Family.NONE
     if referent.config.confound == "position":
         families |= POSITION
+    if referent.config.confound == "layout":  # where the target stands, and among what
+        families |= POSITION | IDENTITY
     if referent.config.distractor_only or referent.config.targets:
         families |= IDENTITY
     return families

@@ -160,10 +160,10 @@ python -m eval policy=<your policy> exam=datasets/{referent.name}-exam
 
 def _mix(audited: Sequence[tuple[Referent, dict]], provenance: Provenance, contents: str, sheet: str) -> str:
     """A mix's card: what the types share, then each type as its own card would say it."""
-    names = [referent.name for referent, _ in audited]
+    names = [referent.label for referent, _ in audited]
     sections = "".join(
         f"""
-## `{referent.name}` (world {referent.config.world})
+## `{referent.label}` (world {referent.config.world})
 
 The instruction names the target by its **{referent.config.naming}**; every value of it is the target and a
 distractor across slots, with {referent.config.objects_per_scene} objects per scene, all in view.
@@ -184,7 +184,11 @@ distractor across slots, with {referent.config.objects_per_scene} objects per sc
 """
         for referent, report in audited
     )
-    exams = "\n".join(f"python -m eval policy=<your policy> exam=datasets/{name}-exam" for name in names)
+    exams = "\n".join(
+        f"python -m eval policy=<your policy> exam=datasets/{referent.name}"
+        f"{'' if referent.label == referent.name else '-' + referent.config.world}-exam"
+        for referent, _ in audited
+    )
     return (
         FRONT_MATTER.format(referent="\n- referent-".join(names))
         + f"""

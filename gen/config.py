@@ -53,7 +53,7 @@ class GenConfig:
     split: str = "train"  # train: a LeRobot dataset; exam: an exam (held-out random stream, no video)
     workers: Optional[int] = None  # processes producing episodes; default: this machine's cores
     backend: str = "process"  # process (this machine) | ray (Ray tasks; RAY_ADDRESS selects a cluster)
-    confound: Optional[str] = None  # "position": put the target in the canonical slot (for comparisons)
+    confound: Optional[str] = None  # position: target in its canonical slot; layout: a benchmark task's own scene
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
@@ -74,7 +74,11 @@ class GenConfig:
         (one dataset mixing them, gen/mix.py), each type with its equal share of `n`."""
         if isinstance(self.referent, str):
             return [self]
-        return [replace(self, referent=name, n=self.n // len(self.referent)) for name in self.referent]
+        shares = []
+        for item in self.referent:
+            name, world = mix.split(item)
+            shares.append(replace(self, referent=name, world=world or self.world, n=self.n // len(self.referent)))
+        return shares
 
 
 def parse(argv: list[str]) -> GenConfig:
@@ -159,18 +163,22 @@ def _validate_mix(cfg: GenConfig) -> None:
     if cfg.out is None:
         cfg.out = str(Path("datasets") / mix.name(names))
     shares = cfg.shares()
-    for share in shares:
-        validate(share)
+    for item, share in zip(names, shares):
+        try:
+            validate(share)
+        except UserError as exc:
+            raise UserError(f"{listed_types}: {item}: {exc}") from None
     recorded = [
-        (s.referent, f"profile {s.profile} ({', '.join(layout(str(s.profile)).image_keys)} at {s.image_size} px)") for s in shares
+        (item, f"profile {s.profile} ({', '.join(layout(str(s.profile)).image_keys)} at {s.image_size} px)")
+        for item, s in zip(names, shares)
     ]
     common = set.intersection(*(set(worlds.world(str(s.world)).profiles) for s in shares))
     mix.check_features(recorded, f"all of them take profile={sorted(common)[0]}" if common else "no profile is taken by all")
-    laid_out = [load_referent(s).name for s in shares]  # `world=` may make one type another's axis there
-    for i, name in enumerate(laid_out):
-        if name in laid_out[:i]:
-            other = names[laid_out.index(name)]
-            raise UserError(f"{listed_types}: {other} and {names[i]} are both {name} in world {shares[i].world}: name it once")
+    laid_out = [load_referent(s).label for s in shares]  # a world may make one type another's axis there
+    for i, label in enumerate(laid_out):
+        if label in laid_out[:i]:
+            other = names[laid_out.index(label)]
+            raise UserError(f"{listed_types}: {other} and {names[i]} are both {label}: name it once")
     first = shares[0]
     cfg.profile, cfg.image_size, cfg.workers = first.profile, first.image_size, first.workers
     check_size(cfg, layout(str(cfg.profile)))

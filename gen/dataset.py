@@ -90,12 +90,12 @@ def verdict(audited: list[tuple[Referent, dict]]) -> str:
     """The audits' verdict; a mix's (gen/mix.py) names each type's."""
     if len(audited) == 1:
         return audited[0][1]["verdict"]
-    return "; ".join(f"{referent.name}: {report['verdict']}" for referent, report in audited)
+    return "; ".join(f"{referent.label}: {report['verdict']}" for referent, report in audited)
 
 
 def write_audit(root: Path, records: list[tuple[Referent, dict]]) -> None:
     """`meta/audit.json`: the type's audits; a mix's, each type's under `referents`."""
-    content = records[0][1] if len(records) == 1 else {"referents": {referent.name: record for referent, record in records}}
+    content = records[0][1] if len(records) == 1 else {"referents": {referent.label: record for referent, record in records}}
     (root / AUDIT_PATH).write_text(json.dumps(content, indent=2))
 
 
@@ -135,7 +135,7 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
 
     types = tuple((one.referent, share.sim) for one, share in zip(cfg.shares(), planned.shares, strict=True))
     job = Job(types, cfg.spec, cfg.spec_overrides(), cfg.codec, cfg.seed, cfg.max_attempts)
-    name = mix.name([share.referent.name for share in planned.shares])
+    name = mix.name([share.referent.label for share in planned.shares])
     bar = tqdm(total=len(planned.designs), initial=done, desc=name, unit="ep", disable=not progress, dynamic_ncols=True)
     failed = 0
     try:

@@ -5,6 +5,9 @@ them in one. Each type keeps its own plan (the roles `referent=<type> n=N/k` wou
 same seed), its own confound audit and its own world; the types take turns in the list's order
 (episode i is of type i mod k), so every prefix of the dataset holds each type's share to within
 one episode. One dataset records one set of features, so the types must record the same ones.
+A type in the list may name its own world, `<type>@<world>` (`color@libero_spatial`): a mix of
+LIBERO's axes draws each from the LIBERO scene that carries it; a type without one is in `world=`,
+or its own.
 """
 
 from __future__ import annotations
@@ -15,6 +18,15 @@ from typing import Any, TypeVar
 from gen.cli import UserError
 
 T = TypeVar("T")
+
+
+WORLD_SEPARATOR = "@"
+
+
+def split(item: str) -> tuple[str, str | None]:
+    """A list item as (type, its world or None): `color@libero_spatial`, or `color`."""
+    name, _, world = item.partition(WORLD_SEPARATOR)
+    return name, world or None
 
 
 def types(referent: Any) -> list[str]:

@@ -16,6 +16,7 @@ from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 
+import referents
 from core import __version__, worlds
 from core.layout import NATIVE
 from gen.config import GenConfig
@@ -61,7 +62,7 @@ class Provenance:
         """A mix of types (gen/mix.py) records each one's spec, by type."""
         if len(types) == 1:
             return cls(cfg, asdict(types[0].config))
-        return cls(cfg, {referent.name: asdict(referent.config) for referent in types})
+        return cls(cfg, {referent.label: asdict(referent.config) for referent in types})
 
     @cached_property
     def spec_hash(self) -> str:
@@ -74,6 +75,9 @@ class Provenance:
         cfg = self.config
         parts = [("n", f"n={cfg.n}"), ("seed", f"seed={cfg.seed}"), ("image_size", f"image_size={cfg.image_size}")]
         parts.append(("fps", f"fps={cfg.fps}"))
+        own = isinstance(cfg.referent, str) and cfg.world == referents.world_of(cfg.referent, cfg.spec)
+        if cfg.world is not None and not own:
+            parts.append(("world", f"world={cfg.world}"))  # a type's own world goes unsaid
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
         for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile"):
             value = getattr(cfg, name)
@@ -95,11 +99,14 @@ class Provenance:
     def exam_command(self) -> str:
         """The held-out exam for a dataset: same referent and options, exam split, another seed;
         for a mix of types (gen/mix.py) one line per type, each type's exam."""
-        kept = [text for name, text in self._options() if name not in NOT_INHERITED_BY_EXAM]
-        return "\n".join(
-            " ".join(["python -m gen", f"referent={one.referent}", *kept, "n=200", f"seed={self.config.seed + 1}", "split=exam"])
-            for one in self.config.shares()
-        )
+        kept = [text for name, text in self._options() if name not in NOT_INHERITED_BY_EXAM and name != "world"]
+        lines = []
+        for one in self.config.shares():
+            own = one.world is None or one.world == referents.world_of(one.referent, one.spec)
+            world = [] if own else [f"world={one.world}"]
+            exam = ["n=200", f"seed={self.config.seed + 1}", "split=exam"]
+            lines.append(" ".join(["python -m gen", f"referent={one.referent}", *world, *kept, *exam]))
+        return "\n".join(lines)
 
     def table(self) -> str:
         """The card's provenance rows (markdown)."""

@@ -70,6 +70,13 @@ class Referent:
     def name(self) -> str:
         return self.config.type
 
+    @property
+    def label(self) -> str:
+        """The type, and its world where that is not the type's own (`color@libero_spatial`): what
+        names it in a mix of types (gen/mix.py)."""
+        own = world_of(self.name) if self.name in available() else self.config.world
+        return self.name if self.config.world == own else f"{self.name}@{self.config.world}"
+
     def design(self, balance: Balance) -> Design:
         try:
             design = destination.add(self.config, self.code.design(destination.inner(self.config), balance))

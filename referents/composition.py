@@ -1,5 +1,6 @@
-"""Composition referent: size and color together name the target, over a 2 sizes x 2 colors
-scene. Counterfactuals change one attribute: the size word, or the color word."""
+"""Composition referent: two attributes together name the target, over a 2 x 2 scene: color and
+the spec's `crossed` attribute (default size; `name` crosses color with what the object is).
+Counterfactuals change one attribute: the crossed word, or the color word."""
 
 from __future__ import annotations
 
@@ -12,8 +13,14 @@ from referents.schema import ReferentConfig
 CONFOUNDS = ("position",)
 
 
+def validate(cfg: ReferentConfig) -> None:
+    crossed = cfg.extra.get("crossed", "size")
+    if not isinstance(crossed, str) or not all(crossed in ("name", "key") or crossed in c.attributes for c in cfg.objects):
+        raise cfg.fail("crossed", f"names the attribute crossed with color, which every object has (or name); got {crossed!r}")
+
+
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
-    scene = crossed_scene(cfg, balance, "size")
+    scene = crossed_scene(cfg, balance, str(cfg.extra.get("crossed", "size")))
     (size, other_size), (color, other_color) = scene.axis, scene.color
     template = balance.pick("template", cfg.templates)
     by_size = scene.objects[(other_size, color)]

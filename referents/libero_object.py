@@ -18,11 +18,11 @@ from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from core.worlds import libero
 from referents import destination
 from referents.balance import Balance
-from referents.compose import naming_design
+from referents.compose import fill, naming_design
 from referents.design import Design, Placement
 from referents.schema import Candidate, ReferentConfig
 
-CONFOUNDS = ("position",)
+CONFOUNDS = ("position", "layout")
 
 
 def _container(cfg: ReferentConfig) -> Candidate:
@@ -41,7 +41,38 @@ def validate(cfg: ReferentConfig) -> None:
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    if cfg.confound == "layout":
+        return _as_liberos_task(cfg, balance)
     return naming_design(cfg, balance)
+
+
+def _as_liberos_task(cfg: ReferentConfig, balance: Balance) -> Design:
+    """`confound=layout`: the scene of the LIBERO-Object task whose target is the balanced choice,
+    as LIBERO's demonstrations lay it out (its groceries, each in its task's region), named with
+    any template; the container is added by the world (referents/destination.py)."""
+    target = balance.pick("target", [c for c in cfg.objects if c.targetable])
+    suite = worlds.world(cfg.world).suite
+    for task in libero.tasks(suite):
+        problem = libero.problem(suite, task)
+        if problem.objects[problem.goal[0][1]] == target.kind:
+            break
+    else:
+        raise cfg.fail("confound", f"no {suite} task's target is {target.name}: its layout is LIBERO's to give")
+    scene = canonical(cfg, problem)
+    template = balance.pick("template", cfg.templates)
+    placements = tuple(p for p in scene.placements if p.candidate.role != destination.FIELD)
+    return replace(
+        scene,
+        placements=placements,
+        template=template,
+        instruction=fill(template, target),
+        counterfactuals=tuple(
+            Counterfactual(fill(template, p.candidate), p.id, (target.name, p.candidate.name))
+            for p in placements
+            if p.id != scene.target
+        ),
+        task=None,
+    )
 
 
 def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:

@@ -8,6 +8,7 @@ counted side. The swap counterfactual names each other block by its rank from th
 from __future__ import annotations
 
 from core.spec import Counterfactual, EpisodeSpec, SceneObject
+from referents import destination
 from referents.balance import Balance
 from referents.design import Design, Placement
 from referents.features import POSITION, Alternative, Feature, object_alternatives
@@ -22,8 +23,9 @@ def validate(cfg: ReferentConfig) -> None:
     columns = _columns(cfg)
     if columns < 2:
         raise cfg.fail("columns", f"a row needs two or more places, got {columns}")
-    if len(cfg.layout.slots) % columns:
-        raise cfg.fail("layout.slots", f"must hold whole rows of {columns} places")
+    if len(destination.inner(cfg).layout.slots) % columns:
+        held = " besides the container's last slot" if destination.container(cfg) else ""
+        raise cfg.fail("layout.slots", f"must hold whole rows of {columns} places{held}")
     if not lengths or min(lengths) < 2 or max(lengths) > min(columns, len(ordinals), cfg.objects_per_scene):
         raise cfg.fail(
             "row_lengths",

@@ -16,7 +16,10 @@ import yaml
 from core import catalog, worlds
 from core.spec import TaskSpec
 
-CONFOUNDS = ("position",)
+# The shortcuts `confound=` may re-introduce, for comparisons: `position` puts every target in its
+# canonical slot; `layout` lays every scene out as a benchmark's own task of that target does (its
+# objects, each in its place: LIBERO's demonstrations), so both where and what co-appears say it.
+CONFOUNDS = ("position", "layout")
 
 
 class ReferentSpecError(ValueError):
@@ -280,6 +283,8 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
         jitter = tuple(float(j) for j in jitter) if isinstance(jitter, list) else float(jitter)
         if isinstance(jitter, tuple) and len(jitter) != len(slots):
             raise ValueError("one jitter per slot")
+        if not all(0 <= j < np.inf for j in (jitter if isinstance(jitter, tuple) else (jitter,))):
+            raise ValueError("jitter is a distance: 0 or more")
         canonical = raw.get("canonical_slot", 0)
         canonical = {str(k): int(v) for k, v in canonical.items()} if isinstance(canonical, dict) else int(canonical)
         layout = Layout(slots, jitter, yaw, canonical)  # type: ignore[arg-type]
@@ -287,7 +292,7 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
         raise fail(
             "layout",
             "slots must be [x, y] (or [x, y, the height of what the object stands on]), "
-            "jitter a number (or one per slot), yaw [min, max]",
+            "jitter a number of 0 or more (or one per slot), yaw [min, max]",
         ) from None
     x0, x1, y0, y1 = world.reach
     for i, (x, y, *_) in enumerate(layout.slots):

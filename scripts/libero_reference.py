@@ -20,9 +20,12 @@ Commands (the request is JSON; what comes back is written to <out>):
   for each goal, LIBERO's environment is made from it and set to each episode's recorded initial
   state (joints by name; objects the episode does not use on the floor out of reach), the
   actions are stepped, and <out> (.json) gets, per episode, `check_success()` after the last
-  action and each object's final position. With `"suite": "libero_spatial"` the problem is
-  instead that suite's own table with goal `(On <target> <container>)`, its fixtures posed as
-  the request's `fixtures` say.
+  action and each object's final position. With a `"suite"` (a table suite: libero_spatial,
+  libero_goal) the problem is instead that suite's own table and fixtures holding the request's
+  objects, with goal `(On <target> <container>)`, its fixtures posed as the request's `fixtures` say.
+* `scenes` — `replay`'s request (actions unused) and `"size"`: LIBERO's frames at each episode's
+  recorded initial state, as `render` writes them for LIBERO's own initial states (keys `<k>-...`
+  for the k-th episode): generated scenes compared picture for picture.
 * `model` — {"suite", "task"}: the compiled physics of a task's scene; <out> (.npz) gets
   `<array>:<name>` for every body's mass and inertia, every joint's damping, armature,
   friction loss and range, every colliding geom's shape, pose, friction and contact
@@ -159,7 +162,17 @@ def render(request: dict, out: str) -> None:
     np.savez(out, **arrays)
 
 
-PARK = [(1.5, -1.0 + 0.2 * k) for k in range(12)]  # floor spots out of reach for the objects an episode does not use
+# floor spots out of reach (and behind the agentview camera) for the objects an episode does not use
+PARK = [(1.5 + 0.3 * i, -1.0 + 0.2 * k) for i in range(3) for k in range(12)]
+
+
+def _declared(objects: dict[str, str]) -> list[str]:
+    """`:objects` lines, one per category with all its instances (`milk_1 milk_2 - milk`): LIBERO's
+    parser keeps only the last line of a category."""
+    by_kind: dict[str, list[str]] = {}
+    for instance, kind in objects.items():
+        by_kind.setdefault(kind, []).append(instance)
+    return [f"    {' '.join(instances)} - {kind}" for kind, instances in by_kind.items()]
 
 
 def _bddl(objects: dict[str, str], target: str, container: str) -> str:
@@ -172,7 +185,7 @@ def _bddl(objects: dict[str, str], target: str, container: str) -> str:
     lines = ["(define (problem LIBERO_Floor_Manipulation)", "  (:domain robosuite)", "  (:language replay)", "  (:regions"]
     lines += [f"    ({name} (:target floor) (:ranges (({x0} {y0} {x1} {y1}))))" for name, (x0, y0, x1, y1) in regions]
     lines += [f"    (contain_region (:target {container}))", "  )", "  (:fixtures floor - floor)", "  (:objects"]
-    lines += [f"    {instance} - {kind}" for instance, kind in objects.items()]
+    lines += _declared(objects)
     lines += ["  )", f"  (:obj_of_interest {target} {container})", "  (:init"]
     free = [name for name, _ in regions if name != "bin_region"]
     for i, instance in enumerate(objects):
@@ -181,21 +194,78 @@ def _bddl(objects: dict[str, str], target: str, container: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _suite_bddl(suite: str, target: str, destination: str) -> str:
-    """A suite's first task's problem (its table, fixtures and objects) with goal `(On <target> <destination>)`."""
+TABLE_PARK = [(0.42 - 0.08 * i, -0.55 + 0.1 * k) for i in range(2) for k in range(12)]  # at the table's far edge
+
+
+def _table_bddl(suite: str, objects: dict[str, str], goal: str) -> str:
+    """A suite's table (its first task's problem: table, fixtures and their regions) holding `objects`
+    (instance -> category) instead of that task's, each in a region of its own at the table's far
+    edge (the recorded initial state then poses them), and the goal `goal`, e.g. `(On bowl_1 plate_1)`."""
     bddl, _ = _task_bddl(suite, 0)
     with open(bddl) as f:
         text = f.read()
-    start = text.index("(:goal")
-    return text[:start] + f"(:goal (And (On {target} {destination})))\n)\n"
+    problem = text[: text.index("(:objects")]
+    regions_end = problem.rindex("(:fixtures")
+    parks = "".join(
+        f"      (park_region_{k}\n          (:target main_table)\n"
+        f"          (:ranges (({x - 0.01} {y - 0.01} {x + 0.01} {y + 0.01})))\n      )\n"
+        for k, (x, y) in enumerate(TABLE_PARK)
+    )
+    closing = problem.rindex(")", 0, regions_end)  # the regions section's own closing parenthesis
+    problem = problem[:closing] + parks + problem[closing:]
+    declared = text[text.index("(:fixtures") : text.index("(:objects")].split()
+    fixtures = {declared[i - 1] for i, word in enumerate(declared) if word == "-"} - {"main_table"}
+    init = [line.strip() for line in text[text.index("(:init") :].splitlines() if line.strip().startswith("(On ")]
+    init = [line for line in init if line.split()[1] in fixtures]  # where the fixtures stand
+    lines = [problem, "  (:objects", *_declared(objects), "  )"]
+    lines += ["  (:obj_of_interest", *(f"    {i}" for i in objects), "  )", "  (:init", *(f"    {line}" for line in init)]
+    lines += [f"    (On {instance} main_table_park_region_{k})" for k, instance in enumerate(objects)]
+    lines += ["  )", f"  (:goal (And {goal}))", ")"]
+    return "\n".join(lines) + "\n"
+
+
+def _goal(suite: str | None, target: str, container: str) -> str:
+    """LIBERO's goal of carrying `target` to `container`: `In` its contain region on LIBERO-Object's
+    floor, `On` it on a suite's table."""
+    return f"(On {target} {container})" if suite else f"(In {target} {container}_contain_region)"
+
+
+def _environment(request: dict, objects: dict[str, str], target: str, container: str, tmp: str, size: int, cameras: bool):  # noqa: ANN202
+    """LIBERO's environment holding `objects`: LIBERO's floor scene, or with a `suite` that suite's
+    table (its fixtures), the goal of carrying `target` to `container`."""
+    suite = request.get("suite")
+    bddl = os.path.join(tmp, f"{target}-{container}.bddl")
+    with open(bddl, "w") as f:
+        goal = _goal(suite, target, container)
+        f.write(_table_bddl(suite, objects, goal) if suite else _bddl(objects, target, container))
+    return _env(bddl, size, cameras)
+
+
+def _pose(env, request: dict, episode: dict, objects: dict[str, str], rest: dict) -> dict:  # noqa: ANN001
+    """Set LIBERO's environment to an episode's recorded initial state: the fixtures where the
+    request stands them, the robot's joints, each object of the episode at its pose and the others
+    out of reach; returns the observation there."""
+    model = env.sim.model
+    for name, *pose in request.get("fixtures", []):
+        body = model.body_name2id(env.env.fixtures_dict[name].root_body)
+        model.body_pos[body], model.body_quat[body] = pose[:3], pose[3:]
+    qpos = np.array(env.sim.data.qpos)
+    for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
+        qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
+    placed = {o["instance"]: o for o in episode["objects"]}
+    for k, instance in enumerate(objects):
+        start, end = model.get_joint_qpos_addr(f"{instance}_joint0")
+        o = placed.get(instance) or {**rest[instance], "pos": [*PARK[k], rest[instance]["pos"][2]]}
+        qpos[start:end] = [*o["pos"], *o["quat"]]
+    return env.set_init_state(np.concatenate([[0.0], qpos, np.zeros(model.nv)]))
 
 
 def replay(request: dict, out: str) -> None:
     """Episodes that ask for the same goal share one environment holding every object of the
     request; an episode's absent objects stand on the floor out of reach. With a `suite`
-    (LIBERO-Spatial's), the environment is that suite's scene, its fixtures posed as the request's
-    `fixtures` ([name, x, y, z, qw, qx, qy, qz]) put them, and its goal LIBERO's `On`."""
-    episodes, suite = request["episodes"], request.get("suite")
+    (LIBERO-Spatial's), the environment is that suite's table (_table_bddl), its fixtures posed as
+    the request's `fixtures` ([name, x, y, z, qw, qx, qy, qz]) put them, and its goal LIBERO's `On`."""
+    episodes = request["episodes"]
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
     rest = {o["instance"]: o for e in episodes for o in e["objects"]}  # any recorded pose: its resting orientation
     goals: dict[tuple[str, str], list[int]] = {}
@@ -204,31 +274,41 @@ def replay(request: dict, out: str) -> None:
     results: list = [None] * len(episodes)
     with tempfile.TemporaryDirectory() as tmp:
         for (target, container), indices in goals.items():
-            bddl = os.path.join(tmp, f"{target}.bddl")
-            with open(bddl, "w") as f:
-                f.write(_suite_bddl(suite, target, container) if suite else _bddl(objects, target, container))
-            env = _env(bddl, 32, cameras=False)
+            env = _environment(request, objects, target, container, tmp, 32, cameras=False)
             for i in indices:
                 env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
-                model, episode = env.sim.model, episodes[i]
-                for name, *pose in request.get("fixtures", []):
-                    body = model.body_name2id(env.env.fixtures_dict[name].root_body)
-                    model.body_pos[body], model.body_quat[body] = pose[:3], pose[3:]
-                qpos = np.array(env.sim.data.qpos)
-                for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
-                    qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
-                placed = {o["instance"]: o for o in episode["objects"]}
-                for k, instance in enumerate(objects):
-                    start, end = model.get_joint_qpos_addr(f"{instance}_joint0")
-                    o = placed.get(instance) or {**rest[instance], "pos": [*PARK[k], rest[instance]["pos"][2]]}
-                    qpos[start:end] = [*o["pos"], *o["quat"]]
-                env.set_init_state(np.concatenate([[0.0], qpos, np.zeros(model.nv)]))
-                for action in episode["actions"]:
+                _pose(env, request, episodes[i], objects, rest)
+                for action in episodes[i]["actions"]:
                     env.step(np.asarray(action, float))
                 results[i] = {"success": bool(env.check_success()), "objects": _positions(env)}
             env.close()
     with open(out, "w") as f:
         json.dump(results, f)
+
+
+def scenes(request: dict, out: str) -> None:
+    """LIBERO's own frames at generated episodes' initial states (`replay`'s request, no actions
+    needed, and `size`): one environment holding every object of the request, set to each episode's
+    recorded state in turn; <out> (.npz) gets, per episode k, `k-agentview`, `k-eye_in_hand`, their
+    `-labels`, `k-things` and `k-objects`, as `render` writes them for an initial state."""
+    episodes, size = request["episodes"], request["size"]
+    objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
+    rest = {o["instance"]: o for e in episodes for o in e["objects"]}
+    arrays = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        first = episodes[0]
+        env = _environment(request, objects, first["target"], first["container"], tmp, size, cameras=True)
+        things = [*env.env.objects_dict, *env.env.fixtures_dict]
+        for k, episode in enumerate(episodes):
+            env.reset()
+            obs = _pose(env, request, episode, objects, rest)
+            arrays[f"{k}-things"] = np.array(things)
+            for cam in CAMERAS:
+                arrays[f"{k}-{cam}"] = obs[f"{cam}_image"]
+                arrays[f"{k}-{cam}-labels"] = _labels(env, cam, size, things)
+            arrays[f"{k}-objects"] = np.array(_positions(env), dtype=object)
+        env.close()
+    np.savez(out, **arrays)
 
 
 def model_arrays(model) -> dict:  # noqa: ANN001
@@ -302,4 +382,4 @@ if __name__ == "__main__":
     command, request_path, out_path = sys.argv[1:4]
     with open(request_path) as f:
         request = json.load(f)
-    {"render": render, "replay": replay, "model": model, "bench": bench}[command](request, out_path)
+    {"render": render, "replay": replay, "scenes": scenes, "model": model, "bench": bench}[command](request, out_path)

@@ -43,17 +43,18 @@ class Pictures:
         self.frame = dict.fromkeys(LIBERO.cameras, 0.0)
         self.things: dict[tuple[str, str], tuple[float, str]] = {}  # (camera, name) -> worst figure, where
 
-    def compare(self, cameras: Cameras, theirs: Mapping[str, np.ndarray], task: int, state: int) -> None:
-        """Our cameras' frames now against LIBERO's of `task`, `state` (its `render` output, turned 180 degrees)."""
+    def compare(self, cameras: Cameras, theirs: Mapping[str, np.ndarray], key: str, where: str) -> None:
+        """Our cameras' frames now against LIBERO's under `key` (`<task>-<state>` of its `render`
+        output, `<episode>` of its `scenes`; turned 180 degrees); `where` names the case in failures."""
         frames, labels = cameras.render(), cameras.labels()
         for camera, model_camera in LIBERO.cameras.items():
-            reference = theirs[f"{task}-{state}-{model_camera}"][::-1, ::-1]
-            their_labels = named(theirs[f"{task}-{state}-{model_camera}-labels"][::-1, ::-1], theirs[f"{task}-{state}-things"])
+            reference = theirs[f"{key}-{model_camera}"][::-1, ::-1]
+            their_labels = named(theirs[f"{key}-{model_camera}-labels"][::-1, ::-1], theirs[f"{key}-things"])
             whole = float(np.abs(frames[camera].astype(int) - reference.astype(int)).mean())
             self.frame[camera] = max(self.frame[camera], whole)
             for name, figure in object_differences(frames[camera], reference, labels[camera], their_labels).items():
                 if figure > self.things.get((camera, name), (-1.0, ""))[0]:
-                    self.things[(camera, name)] = (figure, f"task {task} state {state}")
+                    self.things[(camera, name)] = (figure, where)
 
     def worst(self, camera: str, n: int = 3) -> list[tuple[str, float, str]]:
         """The `n` objects or fixtures farthest from LIBERO's look in `camera`: (name, figure, where)."""
@@ -112,14 +113,18 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     """A dataset's episodes as scripts/libero_reference.py's `replay` takes them, rebuilt from
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
     joints and recorded actions; `target` is what moves and `container` where it goes. A world
-    with fixtures replays in its suite's own scene, the fixtures where the records stand them."""
+    with fixtures replays in its suite's own scene, the fixtures where the records stand them. A
+    dataset mixing worlds (gen/mix.py) gives the episodes of `world`."""
     from core.layout import ACTION_KEY
     from gen import scenes
     from gen.lerobot_reader import LeRobotReader
 
     reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.model == "site"}
+    records = scenes.read(dataset)
+    if "world" in records:
+        records = records[records["world"] == world.name]
     episodes = []
-    for record in scenes.read(dataset).itertuples():
+    for record in records.itertuples():
         scene, params = json.loads(record.scene), json.loads(record.spec)["task"]["params"]
         instance = {o["id"]: sites.get(o["kind"], o["instance"]) for o in scene["objects"]}
         moved, goal = (params["object"], record.target) if "object" in params else (record.target, params["destination"])
@@ -138,9 +143,7 @@ def liberos_replay(dataset: Path, world: World) -> dict:
         )
     if not world.fixtures:
         return {"episodes": episodes}
-    fixtures = {
-        tuple([f["instance"], *f["pos"], *f["quat"]]) for r in scenes.read(dataset).scene for f in json.loads(r)["fixtures"]
-    }
+    fixtures = {tuple([f["instance"], *f["pos"], *f["quat"]]) for r in records.scene for f in json.loads(r)["fixtures"]}
     assert len(fixtures) == len(world.fixtures), "every record names every fixture, at one pose"
     return {"suite": world.suite, "fixtures": [list(f) for f in sorted(fixtures)], "episodes": episodes}
 

@@ -98,7 +98,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Pat
                 body = m.body(f"{name}_main").id
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
             _load(scene, world, t, s)
-            pictures.compare(cameras, theirs, t, s)
+            pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
             ours = scene.positions()
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))

@@ -101,7 +101,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
         for t, s in cases:
             kept = _fixture_poses(scene, theirs[f"{t}-{s}-fixtures"].tolist())
             spec = load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-            pictures.compare(cameras, theirs, t, s)
+            pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
             ours = scene.positions()
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))

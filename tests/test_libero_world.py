@@ -81,7 +81,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
     pictures, farthest = Pictures(), 0.0
     for t, s in cases:
         load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-        pictures.compare(cameras, theirs, t, s)
+        pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
         ours = {world.body_name(body.kind.name, 0): np.asarray(pos) for body, pos in _bodies(scene)}
         for instance, *pos in theirs[f"{t}-{s}-objects"]:
             farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))

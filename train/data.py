@@ -19,15 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from core import cache_dir, parquet
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.layout import ACTION_KEY, LAYOUTS, STATE_KEY, FeatureLayout
 from core.worlds import MAX_IMAGE_SIZE
 from gen.lerobot_reader import INFO_PATH, TASKS_PATH, LeRobotReader
 from gen.lerobot_writer import EPISODES_PATH
 from gen.partial import GENERATION_PATH
 from gen.scenes import SCENES_PATH
-
-CAMERAS = NATIVE.camera_names
-STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
 
 
 class DatasetError(ValueError):
@@ -36,8 +33,9 @@ class DatasetError(ValueError):
 
 @dataclass
 class Frames:
-    """All frames of a dataset: images per camera (N, H, W, 3) uint8, state (N, 16), action
-    (N, 8), episode index, frame index, task index per frame; tasks; episode bounds."""
+    """All frames of a dataset: images per camera (N, H, W, 3) uint8, state (N, state size), action
+    (N, action size), episode index, frame index, task index per frame; tasks; episode bounds;
+    the feature layout (profile) they were recorded in."""
 
     images: dict[str, np.ndarray]
     state: np.ndarray
@@ -51,13 +49,24 @@ class Frames:
     target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
     source: np.ndarray  # the dataset each frame comes from (index into `sources`)
     sources: list[str]
+    profile: str
+    world: str  # the world of the (first) dataset's scenes (core/worlds/)
 
     @property
     def image_size(self) -> int:
-        return self.images[CAMERAS[0]].shape[1]
+        return next(iter(self.images.values())).shape[1]
 
     def __len__(self) -> int:
         return len(self.action)
+
+
+def profile_of(features: dict, root: Path) -> FeatureLayout:
+    """The feature layout (core/layout.py) a dataset's features are: its cameras, state and action."""
+    for candidate in LAYOUTS.values():
+        if set(candidate.image_keys) <= set(features) and STATE_KEY in features and ACTION_KEY in features:
+            return candidate
+    expected = "; ".join(f"{p.name}: {', '.join([*p.image_keys, STATE_KEY, ACTION_KEY])}" for p in LAYOUTS.values())
+    raise DatasetError(f"{root}: its features fit no profile the tiny policy reads ({expected})")
 
 
 def check(root: Path, image_size: int | None = None) -> dict:
@@ -77,13 +86,12 @@ def check(root: Path, image_size: int | None = None) -> dict:
     if info.get("codebase_version") != "v3.0":
         raise DatasetError(f"{root}: codebase_version {info.get('codebase_version')!r}; training reads v3.0 datasets")
     features = info.get("features", {})
-    needed = {NATIVE.image_key(c): None for c in CAMERAS} | {STATE_KEY: STATE_DIM, ACTION_KEY: ACTION_DIM}
+    profile = profile_of(features, root)
+    needed = {key: None for key in profile.image_keys} | {STATE_KEY: profile.state_size, ACTION_KEY: profile.action_size}
     for key, dim in needed.items():
-        if key not in features:
-            raise DatasetError(f"{root}: missing feature {key!r}; the tiny policy needs {', '.join(needed)}")
         if dim is not None and list(features[key]["shape"]) != [dim]:
-            raise DatasetError(f"{root}: feature {key!r} has shape {features[key]['shape']}, expected [{dim}]")
-    sizes = {tuple(features[NATIVE.image_key(c)]["shape"]) for c in CAMERAS}
+            raise DatasetError(f"{root}: feature {key!r} has shape {features[key]['shape']}, expected [{dim}] ({profile.name})")
+    sizes = {tuple(features[key]["shape"]) for key in profile.image_keys}
     if len(sizes) != 1:
         raise DatasetError(f"{root}: cameras have different image sizes {sorted(sizes)}")
     height, width, _ = sizes.pop()
@@ -166,7 +174,7 @@ def union(parts: list[Frames]) -> Frames:
     episode_offsets = np.cumsum([0] + [len(p.starts) for p in parts])
     targets = [p.target for p in parts]
     # one camera at a time, dropping each part's copy as it goes: the union costs half a copy more, not two
-    images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in CAMERAS}
+    images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in list(parts[0].images)}
     return Frames(
         images=images,
         state=np.concatenate([p.state for p in parts]),
@@ -180,6 +188,8 @@ def union(parts: list[Frames]) -> Frames:
         target=None if any(t is None for t in targets) else np.concatenate(targets),  # type: ignore[arg-type]
         source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
         sources=[s for p in parts for s in p.sources],
+        profile=parts[0].profile,
+        world=parts[0].world,
     )
 
 
@@ -208,12 +218,13 @@ def _load(root: Path) -> Frames:
     data, episodes = dataset.data, dataset.episodes
     tasks = dataset.tasks.sort_values("task_index")
     stats = {k: {s: np.asarray(v) for s, v in d.items()} for k, d in dataset.stats.items()}
+    profile = profile_of(json.loads((root / INFO_PATH).read_text())["features"], root)
     cache = cache_dir() / f"{_key(root)}.npz"
     if cache.is_file():
         with np.load(cache) as npz:
-            images = {c: npz[c] for c in CAMERAS}
+            images = {c: npz[c] for c in profile.camera_names}
     else:
-        images = {c: dataset.camera_frames(c) for c in CAMERAS}
+        images = {c: dataset.camera_frames(c) for c in profile.camera_names}
         cache.parent.mkdir(parents=True, exist_ok=True)
         tmp = cache.with_suffix(".tmp.npz")
         np.savez(tmp, **images)
@@ -231,6 +242,8 @@ def _load(root: Path) -> Frames:
         target=_targets(root),
         source=np.zeros(len(data), np.int64),
         sources=[str(root)],
+        profile=profile.name,
+        world=_world(root),
     )
 
 
@@ -245,6 +258,15 @@ def _targets(root: Path) -> np.ndarray | None:
         objects = {o["id"]: o["pos"] for o in json.loads(scene)["objects"]}
         out.append(objects[target])
     return np.asarray(out, np.float32)
+
+
+def _world(root: Path) -> str:
+    """The world of the dataset's first episode (native for datasets without scene records)."""
+    path = root / SCENES_PATH
+    if not path.is_file():
+        return "native"
+    spec = json.loads(parquet.read(path).sort_values("episode_index")["spec"].iloc[0])
+    return str(spec["sim"].get("world", "native"))
 
 
 def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,13 +1,22 @@
 """The end-to-end experiment: does deconfounded data make a policy read its instruction?
 
 python -m train.experiment n=300 steps=9000 decay=3000 lr_floor=0.05 trials=40 image_size=96 out=runs/experiment
+python -m train.experiment world=libero_object repeats=2            # the same proof in LIBERO-Object's world
 
-On the object axis: generate a confounded training set (`confound=position`: the target always
-in the canonical slot) and a deconfounded one of the same size, fine-tune the tiny policy on
-each (LoRA; `finetunes=[lora,full]` adds the full fine-tune), take the same held-out exam with
-every checkpoint, and write `docs/RESULTS.md`, `docs/results.json` and the training curves
-(`docs/training_curves.png`: loss, and obeyed-name on the exam's first `curve_trials` trials at
-the kept checkpoints).
+On one world's object axis (`world=native`: the object referent on our table; a LIBERO world:
+its LIBERO-task referent, `libero_object` on LIBERO-Object's floor): generate a confounded
+training set (natively `confound=position`: every target in the canonical slot; in LIBERO's world
+`confound=layout`: every scene laid out as LIBERO's own task of its target is, as LIBERO's
+demonstrations are) and a deconfounded one of the same size,
+fine-tune the tiny policy on each (LoRA; `finetunes=[lora,full]` adds the full fine-tune;
+`repeats=2` trains the deconfounded run again on its own data, with its own seed), take the same
+held-out exams with every checkpoint — the deconfounded `split=exam` exam, and in a LIBERO world
+the canonical exam on LIBERO's own initial states (`states` per task, `gen.canonical`) — with the
+`position` shortcut measured on each, and write the results (`docs/RESULTS.md` and
+`docs/results.json` natively, `docs/RESULTS_LIBERO.md` and `docs/results_libero.json` for
+LIBERO-Object) with the training curves (loss, and obeyed-name on the first exam's first
+`curve_trials` trials at the kept checkpoints) and, in a LIBERO world, a picture of the policies'
+faces on the canonical exam.
 Checkpoints whose trainable weights fit in `commit_mb` are copied to `docs/checkpoints/`, so
 the exam can be re-run without retraining. Every stage whose output already exists is reused
 (a report while the weights it was taken with are unchanged), so a killed experiment continues
@@ -24,55 +33,115 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+import referents
+from core import worlds
 from core.exam import read
 from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
 from train.stages import Ledger, brief, cell, commit, exam_report, generate_once, schedule, train_log, value
 
 FINETUNES = ("lora", "full", "frozen")
-CURVES_PICTURE = "training_curves.png"
 TRAINING_SETS = ("deconfounded", "confounded")  # the headline first, so a stopped run has it
+EXAM, CANONICAL = "exam", "canonical"  # the deconfounded held-out exam; LIBERO's own initial states
 
 
 @dataclass
 class ExperimentOptions:
+    world: str = "native"  # native: the object axis on our table; a LIBERO world (libero_object): its own object axis
     n: int = 300  # episodes in each training set
     steps: int = 9000  # training steps per checkpoint; raising it later extends finished runs
     decay: int = 3000  # the last this many steps cool the learning rate down to lr_floor of its peak (0: none)
     lr_floor: float = 0.05  # 1: a constant learning rate
     trials: int = 40  # trials in the held-out exam
+    states: int = 4  # a LIBERO world's canonical exam: LIBERO's initial states per task (drawn with seed + 1)
     replan: int = 5  # actions of each predicted chunk executed before the policy looks again
     curve_points: int = 3  # checkpoints kept per training run for the curves (the last is the final model)
     curve_trials: int = 10  # exam trials each curve point takes
     commit_mb: float = 20.0  # checkpoints up to this size are copied to docs/checkpoints/
-    image_size: int = 96  # camera frames in pixels, for the data, the exam and the policy
-    out: str = "runs/experiment"  # data, checkpoints and reports; finished stages found here are reused
-    seed: int = 0  # the training sets' seed (the exam's is seed + 1)
+    image_size: int = 96  # camera frames in pixels, for the data, the exams and the policy
+    out: str | None = None  # data, checkpoints and reports (default runs/experiment, runs/experiment-<world>)
+    seed: int = 0  # the training sets' seed (the exams' is seed + 1)
+    repeats: int = 1  # deconfounded runs, each on its own data with its own seed (seed, seed + 2, seed + 4, ...)
     # Fine-tunes trained on each set (lora, full, frozen). LoRA alone keeps the run near 2.5 h on 2 cores;
     # adding full (~75 min per 9000-step run: 2.0 steps/s) takes it past 3 h.
     finetunes: list[str] = field(default_factory=lambda: ["lora"])
     data: list[str] = field(default_factory=lambda: list(TRAINING_SETS))  # the training sets fine-tuned on, in this order
-    docs: str = "docs"  # where RESULTS.md and results.json go
+    docs: str = "docs"  # where the results go
     train: bool = True  # false: no training; runs not finished in out= are listed as not run
 
 
+@dataclass(frozen=True)
+class Names:
+    """Where a world's results go in docs/."""
+
+    results: str
+    json: str
+    curves: str
+    faces: str
+
+
+def names(world: str) -> Names:
+    """docs/RESULTS.md natively; docs/RESULTS_LIBERO.md for LIBERO-Object (RESULTS_<WORLD>.md for another)."""
+    if world == "native":
+        return Names("RESULTS.md", "results.json", "training_curves.png", "")
+    tag = "libero" if world == "libero_object" else world
+    return Names(f"RESULTS_{tag.upper()}.md", f"results_{tag}.json", f"training_curves_{tag}.png", f"{tag}_faces.png")
+
+
+def _referent(world: str) -> str:
+    """The object axis of `world`: the object referent natively, a LIBERO world's LIBERO-task type."""
+    if world == "native":
+        return "object"
+    found = [r for r in referents.of_world(world) if referents.load(r).code.canonical is not None]
+    if not found:
+        usable = ", ".join(["native", *(w for w in worlds.names() if worlds.world(w).suite and _has_canonical(w))])
+        raise UserError(f"world={world} has no referent type that lays out LIBERO's tasks; worlds: {usable}")
+    return found[0]
+
+
+def _has_canonical(world: str) -> bool:
+    return any(referents.load(r).code.canonical is not None for r in referents.of_world(world))
+
+
+def _out(options: ExperimentOptions) -> Path:
+    return Path(options.out or ("runs/experiment" if options.world == "native" else f"runs/experiment-{options.world}"))
+
+
+def _seeds(options: ExperimentOptions) -> list[int]:
+    return [options.seed + 2 * k for k in range(options.repeats)]
+
+
+def _set_name(data: str, repeat: int) -> str:
+    """A training set's name: `deconfounded`, and `deconfounded-seed<k>` for its repeats."""
+    return data if repeat == 0 else f"{data}-repeat{repeat}"
+
+
 def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
-    """Stage name -> (`python -m gen` options, folder): the two training sets and the exam."""
-    root, size = Path(options.out), f"image_size={options.image_size}"
-    train = ["referent=object", f"n={options.n}", f"seed={options.seed}", size]
-    return {
-        "confounded": ([*train, "confound=position"], root / "data" / "confounded"),
-        "deconfounded": (train, root / "data" / "deconfounded"),
-        "exam": (["referent=object", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}", size], root / "exam"),
-    }
+    """Stage name -> (`python -m gen` options, folder): the training sets and the exam."""
+    root, size, referent = _out(options), f"image_size={options.image_size}", _referent(options.world)
+    train = [f"referent={referent}", f"n={options.n}"]
+    confound = "layout" if "layout" in referents.load(referent).code.CONFOUNDS else "position"
+    stages = {"confounded": ([*train, f"seed={options.seed}", size, f"confound={confound}"], root / "data" / "confounded")}
+    for k, seed in enumerate(_seeds(options)):
+        stages[_set_name("deconfounded", k)] = ([*train, f"seed={seed}", size], root / "data" / _set_name("deconfounded", k))
+    exam = [f"referent={referent}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}", size]
+    stages[EXAM] = (exam, root / "exam")
+    return stages
 
 
 def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     """Every stage's generation config, validated before anything runs."""
-    counts = ("steps", "trials", "replan", "curve_points", "curve_trials")  # n, image_size: checked by `python -m gen`
+    try:
+        world = worlds.world(options.world)
+    except worlds.UnknownWorld as exc:
+        raise UserError(str(exc)) from None
+    _referent(world.name)
+    counts = ("steps", "trials", "replan", "curve_points", "curve_trials", "repeats")  # n, image_size: checked by `python -m gen`
     for name in counts:
         if getattr(options, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
+    if world.suite and not 1 <= options.states <= 50:
+        raise UserError(f"states must be between 1 and 50 (LIBERO's initial states per task), got {options.states}")
     if options.decay < 0:
         raise UserError(f"decay must be at least 0, got {options.decay}")
     if not 0 <= options.lr_floor <= 1:
@@ -85,126 +154,175 @@ def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     return {name: parse([*args, f"out={out}", "overwrite=true"]) for name, (args, out) in _datasets(options).items()}
 
 
+def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) -> Path | None:
+    """A LIBERO world's canonical exam (gen.canonical), made once; None natively."""
+    if not worlds.world(options.world).suite:
+        return None
+    from gen.canonical import CanonicalOptions, build
+
+    out = _out(options) / CANONICAL
+    chosen = CanonicalOptions(options.world, options.states, options.seed + 1, options.image_size, str(out))
+    commands.append(
+        f"python -m gen.canonical world={chosen.world} states={chosen.states} seed={chosen.seed} "
+        f"image_size={chosen.image_size} out={out}"
+    )
+    if not (out / "exam.json").is_file():
+        start = time.perf_counter()
+        build(chosen)
+        ledger.spend("generate canonical", start)
+    return out
+
+
+def _runs(options: ExperimentOptions) -> list[tuple[str, str, int]]:
+    """(training set, fine-tune, training seed) of every run, headline first."""
+    runs = []
+    for data in options.data:
+        seeds = _seeds(options) if data == "deconfounded" else [options.seed]
+        runs += [(_set_name(data, k), finetune, seed) for finetune in options.finetunes for k, seed in enumerate(seeds)]
+    return runs
+
+
 def run(options: ExperimentOptions) -> dict:
     configs = _configs(options)
     from train.fit import LoraOptions, TrainConfig, fit, kept_steps, snapshot_file  # torch loads only for valid input
     from train.policy import MODEL_FILE
 
-    root, stages = Path(options.out), _datasets(options)
+    root, stages = _out(options), _datasets(options)
     commands: list[str] = []
     ledger = Ledger(root)
     for name, (args, out) in stages.items():
         commands.append("python -m gen " + " ".join(args) + f" out={out}")
         generate_once(configs[name], ledger, f"generate {name}")
-    exam_dir = stages["exam"][1]
-    exam = read(exam_dir)
-    curve_rows = exam.trials[exam.trials["trial"] < options.curve_trials]
+    exams = {EXAM: stages[EXAM][1]}
+    canonical = _canonical(options, ledger, commands)
+    if canonical is not None:
+        exams[CANONICAL] = canonical
+    loaded = {name: read(folder) for name, folder in exams.items()}
+    curve_rows = loaded[EXAM].trials[loaded[EXAM].trials["trial"] < options.curve_trials]
     keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
 
-    rows, not_run = [], []
-    for name in options.data:
-        data = stages[name][1]
-        for finetune in options.finetunes:
-            run_name = f"{name}-{finetune}"
-            ckpt = root / "ckpt" / run_name
-            cfg = TrainConfig(
-                dataset=str(data),
-                out=str(ckpt),
-                finetune=finetune,
-                steps=options.steps,
-                decay=options.decay,
-                lr_floor=options.lr_floor,
-                lora=LoraOptions(16),
-                keep_every=keep_every,
-                resume=True,
-            )
-            commands.append(
-                f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
-                f"decay={options.decay} lr_floor={options.lr_floor} keep_every={keep_every} out={ckpt}"
-            )
+    rows, not_run, baselines = [], [], {}
+    for data_name, finetune, seed in _runs(options):
+        data = stages[data_name][1]
+        run_name = f"{data_name}-{finetune}"
+        ckpt = root / "ckpt" / run_name
+        cfg = TrainConfig(
+            dataset=str(data),
+            out=str(ckpt),
+            finetune=finetune,
+            steps=options.steps,
+            decay=options.decay,
+            lr_floor=options.lr_floor,
+            lora=LoraOptions(16),
+            keep_every=keep_every,
+            seed=seed,
+            resume=True,
+        )
+        seeded = f" seed={seed}" if seed else ""
+        commands.append(
+            f"python -m train dataset={data} policy=tiny finetune={finetune} lora.rank=16 steps={options.steps} "
+            f"decay={options.decay} lr_floor={options.lr_floor} keep_every={keep_every}{seeded} out={ckpt}"
+        )
+        log = train_log(ckpt)
+        trained = log["steps"] if log else 0
+        if trained > options.steps:
+            raise UserError(f"{ckpt} holds a {trained}-step run, more than steps={options.steps}; choose another out=")
+        if log is None or schedule(log["config"]) != schedule(asdict(cfg)):
+            if not options.train:
+                not_run.append(run_name)
+                continue
+            t = time.perf_counter()
+            try:  # a killed run, or a finished shorter one, continues from its last matching state
+                fit(cfg)
+            except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
+                raise Failed(f"training {ckpt}: {exc}") from None
+            ledger.spend(f"train {run_name}", t)
             log = train_log(ckpt)
-            trained = log["steps"] if log else 0
-            if trained > options.steps:
-                raise UserError(f"{ckpt} holds a {trained}-step run, more than steps={options.steps}; choose another out=")
-            if log is None or schedule(log["config"]) != schedule(asdict(cfg)):
-                if not options.train:
-                    not_run.append(run_name)
-                    continue
-                t = time.perf_counter()
-                try:  # a killed run, or a finished shorter one, continues from its last matching state
-                    fit(cfg)
-                except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
-                    raise Failed(f"training {ckpt}: {exc}") from None
-                ledger.spend(f"train {run_name}", t)
-                log = train_log(ckpt)
-            report_dir = root / "reports" / run_name / f"step-{options.steps}"
-            commands.append(
-                f"python -m eval policy=ckpt:{ckpt} exam={exam_dir} replan={options.replan} workers=2 out={report_dir}"
-            )
-            report = exam_report(exam, ckpt, exam.trials, report_dir, options.replan, ledger, f"eval {run_name}")
-            curve = []
-            for step in [*kept_steps(ckpt, options.steps), options.steps]:
-                weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
-                point_dir = root / "curves" / run_name / f"step-{step}"
-                point = exam_report(exam, weights, curve_rows, point_dir, options.replan, ledger, f"curve {run_name}", False)
-                curve.append({"step": step, "obeyed_name": brief(point["faces"]["obeyed_name"])})
+        curve = []
+        for step in [*kept_steps(ckpt, options.steps), options.steps]:
+            weights = ckpt / (MODEL_FILE if step == options.steps else snapshot_file(step))
+            point_dir = root / "curves" / run_name / f"step-{step}"
+            point = exam_report(loaded[EXAM], weights, curve_rows, point_dir, options.replan, ledger, f"curve {run_name}", False)
+            curve.append({"step": step, "obeyed_name": brief(point["faces"]["obeyed_name"])})
+        for exam_name, folder in exams.items():
+            # natively reports/<run>/step-N, as the object-axis results were made; a LIBERO world's per exam
+            report_dir = root / "reports" / run_name / ("" if canonical is None else exam_name) / f"step-{options.steps}"
+            commands.append(f"python -m eval policy=ckpt:{ckpt} exam={folder} replan={options.replan} workers=2 out={report_dir}")
+            report = exam_report(loaded[exam_name], ckpt, loaded[exam_name].trials, report_dir, options.replan, ledger,
+                                 f"eval {run_name} {exam_name}")  # fmt: skip
+            baselines[exam_name] = report["baseline"]
             rows.append(
                 {
-                    "data": name,
+                    "data": data_name,
                     "finetune": finetune,
+                    "seed": seed,
+                    "exam": exam_name,
                     "faces": report["faces"],
                     **({"grounding": report["grounding"]} if "grounding" in report else {}),
                     "init_value_trusted": report["init_value"]["trusted"],
                     "reach_probe": report["reach_probe"],
                     "distances": report["distances"],
+                    "per_object": report.get("per_object"),
                     "final_loss": log["final_loss"],
                     "trainable_parameters": log["trainable_parameters"],
                     "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]],
                     "heldout_curve": curve,
-                    "checkpoint": commit(ckpt / MODEL_FILE, Path(options.docs) / "checkpoints" / run_name, options.commit_mb),
+                    "checkpoint": commit(
+                        ckpt / MODEL_FILE, Path(options.docs) / "checkpoints" / _committed(options, run_name), options.commit_mb
+                    ),  # fmt: skip
                 }
             )
-    if rows:  # the measured shortcut on the same exam: what a position-reading policy scores
-        rows.append({"data": None, "finetune": None, "policy": "position", "faces": report["baseline"]})
-    return {"settings": asdict(options), "rows": rows, "not_run": not_run, "commands": commands, "timings_s": ledger.spent}
+    for exam_name, faces in baselines.items():  # the measured shortcut on the same exam: what a position-reading policy scores
+        rows.append({"data": None, "finetune": None, "policy": "position", "exam": exam_name, "faces": faces})
+    settings = asdict(options) | {"out": str(root)}
+    return {"settings": settings, "rows": rows, "not_run": not_run, "commands": commands, "timings_s": ledger.spent}
+
+
+def _committed(options: ExperimentOptions, run_name: str) -> str:
+    """A run's folder under docs/checkpoints/: its name natively, `<world>-<name>` in another world."""
+    return run_name if options.world == "native" else f"{options.world}-{run_name}"
 
 
 def write_docs(results: dict, docs: Path) -> None:
-    docs.mkdir(parents=True, exist_ok=True)
-    (docs / "results.json").write_text(json.dumps(results, indent=2))
     s = results["settings"]
+    world = s.get("world", "native")
+    named = names(world)
+    docs.mkdir(parents=True, exist_ok=True)
+    (docs / named.json).write_text(json.dumps(results, indent=2))
+    where = "the object axis" if world == "native" else f"the object axis in world {world}"
+    exams = list(dict.fromkeys(r.get("exam", EXAM) for r in results["rows"]))
     lines = [
-        "# Results: deconfounded data x low-rank update, object axis",
+        f"# Results: deconfounded data x low-rank update, {where}",
         "",
         f"Generated by `python -m train.experiment` ({', '.join(f'{k}={value(v)}' for k, v in s.items())}). "
         f"Training sets: {s['n']} oracle demonstrations each at {s['image_size']} px; the held-out exam has "
-        f"{s['trials']} trials (task, a swap for every other object, occ, nonsense). Rates carry k/n and a 95% "
-        "interval that resamples whole trials (a trial's rollouts share its scene); chance for obeyed-name/true-target "
-        "is 1 / (objects in the scene), and the `position` row is the measured shortcut on the same exam. Obeyed name "
-        "is given at three levels: landed within 5 cm, within 2 cm, achieved the program on the named object.",
-        "",
-        "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | grounded (first frame) "
-        "| true target | occ | nonsense | chance |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in results["rows"]:
-        f = r["faces"]
-        levels = f["obeyed_name"].get("by_level") or {}
-        by = [cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
-        who = (r["data"], r["finetune"]) if r["data"] else ("—", "`position` (shortcut)")
-        grounded = cell(r["grounding"]) if "grounding" in r else "—"
-        lines.append(
-            f"| {who[0]} | {who[1]} | {cell(f['task'])} | {cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
-            f"| {cell(f['true_target'])} | {cell(f['occ'])} | {cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
+        f"{s['trials']} trials (task, a swap for every other object, occ, nonsense)"
+        + (
+            f"; the canonical exam is LIBERO's own initial states, {s['states']} per task, the same faces on each"
+            if CANONICAL in exams
+            else ""
         )
+        + ". Rates carry k/n and a 95% interval that resamples whole trials (a trial's rollouts share its scene); "
+        "chance for obeyed-name/true-target is 1 / (objects in the scene), and the `position` row is the measured "
+        "shortcut on the same exam. Obeyed name is given at three levels: landed within 5 cm, within 2 cm, achieved "
+        "the program on the named object.",
+    ]
+    for exam in exams:
+        if len(exams) > 1:
+            title = "the canonical exam (LIBERO's own initial states)" if exam == CANONICAL else "the deconfounded exam"
+            lines += ["", f"## On {title}"]
+        lines += _table([r for r in results["rows"] if r.get("exam", EXAM) == exam])
     if results.get("not_run"):
         lines += ["", f"Not run (no finished training in `{s['out']}`): {', '.join(results['not_run'])}."]
-    trained = [r for r in results["rows"] if r["data"]]
+    trained = [r for r in results["rows"] if r["data"] and r.get("exam", EXAM) == EXAM]
     if trained:
-        plot_curves(trained, docs / CURVES_PICTURE)
+        plot_curves(trained, docs / named.curves)
+        if CANONICAL in exams:
+            plot_faces([r for r in results["rows"] if r.get("exam") == CANONICAL], docs / named.faces)
+            lines += ["", f"![faces on the canonical exam]({named.faces})"]
         lines += [
             "",
-            f"![training curves]({CURVES_PICTURE})",
+            f"![training curves]({named.curves})",
             "",
             f"Training curves: loss (left) and obeyed-name at 5 cm on the exam's first {s['curve_trials']} trials at "
             "kept checkpoints (right; the last point is the final model).",
@@ -226,7 +344,54 @@ def write_docs(results: dict, docs: Path) -> None:
         "",
     ]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
-    (docs / "RESULTS.md").write_text("\n".join(lines) + "\n")
+    (docs / named.results).write_text("\n".join(lines) + "\n")
+
+
+def _table(rows: list[dict]) -> list[str]:
+    lines = [
+        "",
+        "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | grounded (first frame) "
+        "| true target | occ | nonsense | chance |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        f = r["faces"]
+        levels = f["obeyed_name"].get("by_level") or {}
+        by = [cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
+        who = (r["data"], r["finetune"]) if r["data"] else ("—", "`position` (shortcut)")
+        grounded = cell(r["grounding"]) if "grounding" in r else "—"
+        lines.append(
+            f"| {who[0]} | {who[1]} | {cell(f['task'])} | {cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
+            f"| {cell(f['true_target'])} | {cell(f['occ'])} | {cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
+        )
+    return lines
+
+
+def plot_faces(rows: list[dict], path: Path) -> None:
+    """Each policy's faces (task, obeyed name, true target, occ, nonsense) side by side, with their
+    trial-resampled intervals: a reading policy obeys, a blind one does the task and goes to the original."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    faces = ("task", "obeyed_name", "true_target", "occ", "nonsense")
+    fig, ax = plt.subplots(figsize=(9, 3.6))
+    width = 0.8 / max(1, len(rows))
+    for i, r in enumerate(rows):
+        label = f"{r['data']} {r['finetune']}" if r["data"] else "position (shortcut)"
+        rates = [r["faces"][f]["rate"] for f in faces]
+        lo, hi = zip(*((r["faces"][f].get("ci_trials") or r["faces"][f]["ci"]) for f in faces))
+        x = np.arange(len(faces)) + (i - (len(rows) - 1) / 2) * width
+        errors = [[max(0.0, v - a) for v, a in zip(rates, lo)], [max(0.0, b - v) for v, b in zip(rates, hi)]]
+        ax.bar(x, rates, width, yerr=errors, capsize=2, label=label)
+    ax.set_xticks(np.arange(len(faces)), [f.replace("_", " ") for f in faces])
+    ax.set(ylim=(0, 1.05), ylabel="rate (95% CI, trials resampled)", title="on LIBERO's own initial states")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def plot_curves(rows: list[dict], path: Path) -> None:
@@ -264,7 +429,7 @@ def plot_curves(rows: list[dict], path: Path) -> None:
 def experiment(options: ExperimentOptions) -> None:
     results = run(options)
     write_docs(results, Path(options.docs))
-    print((Path(options.docs) / "RESULTS.md").read_text())
+    print((Path(options.docs) / names(options.world).results).read_text())
 
 
 if __name__ == "__main__":

@@ -25,8 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from core import worlds
 from train import data
-from train.model import CAMERAS, ModelConfig, TinyPolicy
+from train.model import ModelConfig, TinyPolicy
 from train.policy import MODEL_FILE, save
 
 LAST = "last.pt"
@@ -81,15 +82,22 @@ class TrainConfig:
     resume: bool = False
 
 
-def model_config(cfg: TrainConfig, image_size: int) -> ModelConfig:
+def model_config(cfg: TrainConfig, frames: data.Frames) -> ModelConfig:
+    """The model for `frames`: their frame size and profile; the auxiliary target counted from 5 cm
+    above the middle of their world's workspace (a table top, LIBERO's floor)."""
     rank = cfg.lora.rank
+    world = worlds.world(frames.world)
+    x0, x1, y0, y1 = world.reach
+    centre = ((x0 + x1) / 2, (y0 + y1) / 2, round(world.surface_z + 0.05, 6))
     return ModelConfig(
-        image_size=image_size,
+        image_size=frames.image_size,
         chunk=cfg.chunk,
         finetune=cfg.finetune,
         lora_rank=rank,
         lora_alpha=cfg.lora.alpha or 2 * rank,
         feed_located=cfg.feed_located,
+        profile=frames.profile,
+        locate_origin=centre,  # type: ignore[arg-type]
     )
 
 
@@ -127,7 +135,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(cfg.seed)
     torch.manual_seed(cfg.seed)
-    model = TinyPolicy(model_config(cfg, frames.image_size), frames.stats)
+    model = TinyPolicy(model_config(cfg, frames), frames.stats)
     text_params = [p for p in model.text.parameters() if p.requires_grad]
     other = [p for n, p in model.named_parameters() if p.requires_grad and not n.startswith("text.")]
     text_lr = cfg.text_lr or (3e-5 if cfg.finetune == "full" else cfg.lr)
@@ -161,7 +169,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
         index = data.sample(frames, rng, cfg.batch_size, cfg.balance)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
-        images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in CAMERAS}
+        images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in model.cameras}
         state = torch.from_numpy(frames.state[index])
         tasks = frames.task[index]
         with torch.autocast("cpu", dtype=torch.bfloat16, enabled=cfg.bf16):

@@ -32,13 +32,11 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch import nn  # noqa: E402
 
-from core.layout import NATIVE  # noqa: E402
+from core.layout import NATIVE, FeatureLayout, layout  # noqa: E402
 
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
-CAMERAS = NATIVE.camera_names
-LOCATE_ORIGIN, LOCATE_SCALE = (0.0, 0.0, 0.85), 0.2  # the auxiliary target: table centre, 20 cm units
-STATE_DIM, ACTION_DIM = NATIVE.state_size, NATIVE.action_size
+LOCATE_SCALE = 0.2  # the auxiliary target in 20 cm units from `locate_origin`
 
 
 @dataclass
@@ -52,9 +50,15 @@ class ModelConfig:
     keypoints: int = 32
     hidden: int = 512
     feed_located: bool = False  # the head also reads the auxiliary head's prediction (detached)
+    profile: str = NATIVE.name  # the feature layout it reads and acts in (core/layout.py): cameras, state, action
+    locate_origin: tuple[float, float, float] = (0.0, 0.0, 0.85)  # where the auxiliary target is 0: the scenes' centre
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    @property
+    def features(self) -> FeatureLayout:
+        return layout(self.profile)
 
 
 def text_tower(config: ModelConfig) -> tuple[object, nn.Module]:
@@ -122,16 +126,17 @@ class TinyPolicy(nn.Module):
         super().__init__()
         self.config = config
         self.tokenizer, self.text = text_tower(config)
-        self.cameras = nn.ModuleDict({c: CameraEncoder(config) for c in CAMERAS})
+        features = config.features
+        self.cameras = nn.ModuleDict({c: CameraEncoder(config) for c in features.camera_names})
         self.text_proj = nn.Linear(TEXT_DIM, 128)
-        width = sum(e.out_dim for e in self.cameras.values()) + STATE_DIM + 128
-        self.locate = nn.Sequential(nn.Linear(width - STATE_DIM, 128), nn.ReLU(), nn.Linear(128, 3))
+        width = sum(e.out_dim for e in self.cameras.values()) + features.state_size + 128
+        self.locate = nn.Sequential(nn.Linear(width - features.state_size, 128), nn.ReLU(), nn.Linear(128, 3))
         self.head = nn.Sequential(
             nn.Linear(width + (3 if config.feed_located else 0), config.hidden),
             nn.ReLU(),
             nn.Linear(config.hidden, config.hidden),
             nn.ReLU(),
-            nn.Linear(config.hidden, config.chunk * ACTION_DIM),
+            nn.Linear(config.hidden, config.chunk * features.action_size),
         )
         for key, name in (("observation.state", "state"), ("action", "action")):
             self.register_buffer(f"{name}_mean", torch.as_tensor(np.asarray(stats[key]["mean"]), dtype=torch.float32))
@@ -149,27 +154,25 @@ class TinyPolicy(nn.Module):
     def forward(
         self, images: dict[str, torch.Tensor], state: torch.Tensor, text: torch.Tensor, state_noise: float = 0.0
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Images (B, H, W, 3) uint8, state (B, 16), text (B, 384) -> normalised actions
-        (B, chunk, 8) and where the named object is (B, 3, normalised: see `locate_target`)."""
-        feats = [self.cameras[c](images[c].permute(0, 3, 1, 2).float() / 255.0, text) for c in CAMERAS]
+        """Images (B, H, W, 3) uint8 per camera, state (B, state size), text (B, 384) -> normalised
+        actions (B, chunk, action size) and where the named object is (B, 3, normalised: see `locate_target`)."""
+        feats = [self.cameras[c](image.permute(0, 3, 1, 2).float() / 255.0, text) for c, image in images.items()]
         s = (state - self.state_mean) / self.state_std
         if state_noise > 0:
             s = s + state_noise * torch.randn_like(s)
         seen = torch.cat([*feats, self.text_proj(text)], dim=1)
         located = self.locate(seen)
         inputs = [seen, s, located.detach()] if self.config.feed_located else [seen, s]
-        actions = self.head(torch.cat(inputs, dim=1)).reshape(-1, self.config.chunk, ACTION_DIM)
+        actions = self.head(torch.cat(inputs, dim=1)).reshape(-1, self.config.chunk, self.config.features.action_size)
         return actions, located
 
-    @staticmethod
-    def locate_target(position: torch.Tensor) -> torch.Tensor:
-        """World position -> the auxiliary head's normalised target (table centre, 20 cm units)."""
-        return (position - torch.tensor(LOCATE_ORIGIN)) / LOCATE_SCALE
+    def locate_target(self, position: torch.Tensor) -> torch.Tensor:
+        """World position -> the auxiliary head's normalised target (from the scenes' centre, 20 cm units)."""
+        return (position - torch.tensor(self.config.locate_origin)) / LOCATE_SCALE
 
-    @staticmethod
-    def world_position(located: torch.Tensor) -> torch.Tensor:
+    def world_position(self, located: torch.Tensor) -> torch.Tensor:
         """The auxiliary head's output -> a world position (the inverse of `locate_target`)."""
-        return located * LOCATE_SCALE + torch.tensor(LOCATE_ORIGIN)
+        return located * LOCATE_SCALE + torch.tensor(self.config.locate_origin)
 
     def normalise(self, action: torch.Tensor) -> torch.Tensor:
         return (action - self.action_mean) / self.action_std

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY
+from core.layout import ACTION_KEY, STATE_KEY
 from eval.policies import Context, PolicyError, require_features
 
 if TYPE_CHECKING:
@@ -89,8 +89,8 @@ class CheckpointPolicy:
 
     def check(self, features: dict[str, tuple[int, ...]]) -> None:
         """Refuse an exam whose cameras, frame size, state or action are not this checkpoint's."""
-        size = self.model.config.image_size
-        expected = {NATIVE.image_key(c): (size, size, 3) for c in self.model.cameras}
+        size, profile = self.model.config.image_size, self.model.config.features
+        expected = {profile.image_key(c): (size, size, 3) for c in self.model.cameras}
         expected |= {STATE_KEY: tuple(self.model.state_mean.shape), ACTION_KEY: tuple(self.model.action_mean.shape)}
         require_features(expected, features, f"checkpoint {self.name.removeprefix('ckpt:')}")
 
@@ -98,23 +98,23 @@ class CheckpointPolicy:
         self._queue = []
 
     def chunk(self, observation: dict) -> np.ndarray:
-        """The next `chunk` actions (chunk, 8) for an observation dict."""
+        """The next `chunk` actions (chunk, action size) for an observation dict."""
         return self._forward(observation)[0]
 
     def _forward(self, observation: dict) -> tuple[np.ndarray, np.ndarray]:
         """(the action chunk, the located target in world coordinates) for an observation."""
         import torch
 
-        size = self.model.config.image_size
+        size, features = self.model.config.image_size, self.model.config.features
         for cam in self.model.cameras:
-            shape = observation[NATIVE.image_key(cam)].shape
+            shape = observation[features.image_key(cam)].shape
             if shape != (size, size, 3):
                 raise ValueError(f"{cam} frames are {shape}, the checkpoint was trained on {size} px")
         text = observation["task"]
         with torch.inference_mode():
             if text not in self._embeddings:
                 self._embeddings[text] = self.model.embed([text])
-            frames = {c: np.ascontiguousarray(observation[NATIVE.image_key(c)]) for c in self.model.cameras}
+            frames = {c: np.ascontiguousarray(observation[features.image_key(c)]) for c in self.model.cameras}
             images = {c: torch.from_numpy(frame)[None] for c, frame in frames.items()}
             state = torch.from_numpy(np.asarray(observation[STATE_KEY], np.float32))[None]
             actions, located = self.model(images, state, self._embeddings[text])

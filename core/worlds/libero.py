@@ -16,7 +16,7 @@ from __future__ import annotations
 import ast
 import importlib.util
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
@@ -109,6 +109,24 @@ KINDS: dict[str, Kind] = {
             params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"},
             quat=FLAT,
         ),
+    )
+}
+
+
+def _recoloured(kind: Kind, name: str) -> Kind:
+    """LIBERO-PRO's copy of a LIBERO object under another color (registered in LIBERO's envs/objects/
+    as its own category): the same mesh and collision boxes, another texture or a flat color."""
+    xml = str(Path(kind.params["xml"]).parent.parent / name / f"{name}.xml")
+    return replace(kind, name=name, params={**kind.params, "xml": xml})
+
+
+KINDS |= {
+    k.name: k
+    for k in (
+        _recoloured(KINDS["akita_black_bowl"], "red_akita_black_bowl"),  # flat red
+        _recoloured(KINDS["akita_black_bowl"], "yellow_bowl"),  # a yellow texture on the akita bowl's mesh
+        _recoloured(KINDS["ketchup"], "green_ketchup"),
+        _recoloured(KINDS["butter"], "green_butter"),
     )
 }
 
