@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import multiprocessing
+import os
 import signal
 import tempfile
 import time
@@ -34,10 +35,14 @@ from eval.report import write_reports
 from eval.rollout import Runner, run_chunk
 from eval.score import POLICY_KEY, read_logs, score
 from gen.partial import Partial
+from gen.workers import die_with
 
 ROLLOUTS = "rollouts.parquet"
 REPORT_FILES = ("report.json", "report.md", "report.html", ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
-_IGNORE_SIGINT = (signal.SIGINT, signal.SIG_IGN)  # a pool worker's initializer: Ctrl-C is for the parent to handle
+def _worker(parent: int) -> None:
+    """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/workers.py)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with(parent)
 
 
 def shortcut_baseline(exam: Exam, rows: pd.DataFrame, workers: int = 1) -> dict:
@@ -108,7 +113,7 @@ def _run(
     if workers > 1 and policy_name is not None:
         chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]
         # Ctrl-C reaches the whole process group: the workers ignore it, this process stops the pool
-        with multiprocessing.get_context("spawn").Pool(len(chunks), initializer=signal.signal, initargs=_IGNORE_SIGINT) as pool:
+        with multiprocessing.get_context("spawn").Pool(len(chunks), initializer=_worker, initargs=(os.getpid(),)) as pool:
             pool.starmap(run_chunk, [(policy_name, c, policy_options, partial) for c in chunks])
     else:
         runner = Runner(policy)

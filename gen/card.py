@@ -190,7 +190,7 @@ distractor across slots, with {referent.config.objects_per_scene} objects per sc
         for referent, _ in audited
     )
     return (
-        FRONT_MATTER.format(referent="\n- referent-".join(names))
+        FRONT_MATTER.format(referent="\n- referent-".join(dict.fromkeys(referent.name for referent, _ in audited)))
         + f"""
 # Deconfounded dataset of {len(names)} referent types: {", ".join(f"`{name}`" for name in names)}
 

@@ -76,7 +76,7 @@ class GenConfig:
             return [self]
         shares = []
         for item in self.referent:
-            name, world = mix.split(item)
+            name, world = referents.own_name(*mix.split(item))  # `object@libero_object` is libero_object
             shares.append(replace(self, referent=name, world=world or self.world, n=self.n // len(self.referent)))
         return shares
 

@@ -12,8 +12,10 @@ first episode of that type comes.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import ctypes
 import multiprocessing
 import os
+import signal
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -60,6 +62,23 @@ def _init(job: Job) -> None:
     _job = job
 
 
+def die_with(parent: int) -> None:
+    """Make this worker process die with the run that started it (pid `parent`): a run killed
+    outright (SIGKILL, out of memory) would otherwise leave its pool's workers waiting forever,
+    holding its output pipes open (Linux's parent-death signal; elsewhere nothing is armed)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the run died before the signal was armed
+        os._exit(1)
+
+
+def _init_process(job: Job, parent: int) -> None:
+    die_with(parent)
+    _init(job)
+
+
 def _produce(index: int, design: Design) -> Produced:
     assert _job is not None
     faults.point(f"worker:{index}")
@@ -89,7 +108,8 @@ def _processes(job: Job, plan: list[Design], workers: int, start: int) -> Iterat
     next_index, restarts = start, 0
     while next_index < len(plan):
         context = multiprocessing.get_context("spawn")
-        with cf.ProcessPoolExecutor(workers, mp_context=context, initializer=_init, initargs=(job,)) as pool:
+        initargs = (job, os.getpid())
+        with cf.ProcessPoolExecutor(workers, mp_context=context, initializer=_init_process, initargs=initargs) as pool:
             window: dict[int, cf.Future] = {}
             submitted = next_index
             try:

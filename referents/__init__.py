@@ -41,8 +41,8 @@ from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
 
 __all__ = [
-    "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "pick_and_lift", "spec_file",
-    "world_of", "worlds_of",
+    "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "own_name", "pick_and_lift",
+    "spec_file", "world_of", "worlds_of",
 ]  # fmt: skip
 
 HERE = Path(__file__).parent
@@ -170,6 +170,13 @@ def spec_file(name: str, world: str | None = None) -> Path:
         return HERE / f"{alias[0]}.yaml"
     carriers = ", ".join(worlds_of(name))
     raise UnknownReferent(f"referent {name} has no design in world {world}; worlds that carry {name}: {carriers}")
+
+
+def own_name(name: str, world: str | None) -> tuple[str, str | None]:
+    """A type in a world as the built-in type that is that axis there, in its own world
+    (`object` in libero_object: `libero_object`, None), else as given."""
+    alias = [a for a in _aliases(name) if world is not None and world_of(a) == world] if name in available() else []
+    return (alias[0], None) if alias and not (IN_WORLDS / world / f"{name}.yaml").is_file() else (name, world)  # type: ignore[operator]
 
 
 def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:

@@ -64,6 +64,16 @@ def test_each_axis_is_its_types_own_design_in_a_liberos_scene(name: str) -> None
 
 
 @pytest.mark.fast
+def test_the_axis_a_liberos_type_is_is_that_type() -> None:
+    """`referent=object world=libero_object` is what `referent=libero_object` makes (and relation,
+    goal: LIBERO-Spatial's and LIBERO-Goal's types)."""
+    for axis, own in (("object", "libero_object"), ("relation", "libero_spatial"), ("goal", "libero_goal")):
+        alias, itself = referents.load(axis, world=own), referents.load(own)
+        assert plan(alias, 12, 3, default_sim(alias)) == plan(itself, 12, 3, default_sim(itself))
+        assert referents.own_name(axis, own) == (own, None)
+
+
+@pytest.mark.fast
 def test_a_type_a_world_cannot_carry_is_refused_naming_those_that_can(tmp_path: Path) -> None:
     out = tmp_path / "out"
     done = subprocess.run(

@@ -20,9 +20,20 @@ from gen.config import GenConfig, parse
 from gen.plan import plan_and_audit
 from helpers import make_dataset
 
-TYPES = ("libero_object", "libero_spatial", "libero_goal")
-MIXED = f"referent=[{','.join(TYPES)}]"
-ARGS = (MIXED, "n=3", "image_size=64", "seed=2", "workers=1")
+# The reference study's seven types, each in the LIBERO scene that carries it: (as the list names
+# it, the type its episodes record, their world, the type's name in the mix)
+STUDY = (
+    ("object@libero_object", "libero_object", "libero_object", "libero_object"),
+    ("relation@libero_spatial", "libero_spatial", "libero_spatial", "libero_spatial"),
+    ("goal@libero_goal", "libero_goal", "libero_goal", "libero_goal"),
+    ("color@libero_spatial", "color", "libero_spatial", "color@libero_spatial"),
+    ("category@libero_object", "category", "libero_object", "category@libero_object"),
+    ("negation@libero_object", "negation", "libero_object", "negation@libero_object"),
+    ("composition@libero_object", "composition", "libero_object", "composition@libero_object"),
+)
+ITEMS, TYPES, WORLDS, LABELS = (list(column) for column in zip(*STUDY))
+MIXED = f"referent=[{','.join(ITEMS)}]"
+ARGS = (MIXED, f"n={len(STUDY)}", "image_size=64", "seed=2", "workers=2")
 FILES = (
     "data/chunk-000/file-000.parquet",
     "meta/scenes.parquet",
@@ -51,16 +62,16 @@ def mixed(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_a_mix_is_one_lerobot_dataset_whose_episodes_take_turns(mixed: Path) -> None:
     ds = LeRobotDataset("local/mixed", root=mixed)
-    assert ds.num_episodes == 3 and set(ds.meta.features) >= {*LIBERO.image_keys, STATE_KEY, ACTION_KEY}
+    assert ds.num_episodes == len(STUDY) and set(ds.meta.features) >= {*LIBERO.image_keys, STATE_KEY, ACTION_KEY}
     records = scenes.read(mixed)
-    assert list(records["referent"]) == list(TYPES) and list(records["world"]) == list(TYPES)
-    assert [json.loads(scene)["world"] for scene in records["scene"]] == list(TYPES)
-    for ep in range(3):
+    assert list(records["referent"]) == TYPES and list(records["world"]) == WORLDS
+    assert [json.loads(scene)["world"] for scene in records["scene"]] == WORLDS
+    for ep in range(len(STUDY)):
         item = ds[ds.meta.episodes[ep]["dataset_from_index"]]
         assert item["task"] == records["instruction"][ep]
         assert tuple(item["observation.images.image"].shape) == (3, 64, 64)
     generation = json.loads((mixed / "meta/generation.json").read_text())
-    assert generation["config"]["referent"] == list(TYPES) and sorted(generation["referent_spec"]) == sorted(TYPES)
+    assert generation["config"]["referent"] == ITEMS and sorted(generation["referent_spec"]) == sorted(LABELS)
     check = subprocess.run([sys.executable, "-m", "gen.check", str(mixed)], capture_output=True, text=True)
     assert check.returncode == 0, check.stderr
     doctor = Path(sys.executable).with_name("lerobot-doctor")
@@ -71,20 +82,22 @@ def test_a_mix_is_one_lerobot_dataset_whose_episodes_take_turns(mixed: Path) -> 
 
 def test_every_type_has_its_own_audit_and_card_section(mixed: Path) -> None:
     audits = json.loads((mixed / "meta/audit.json").read_text())["referents"]
-    assert list(audits) == list(TYPES)
-    for name, record in audits.items():
+    assert list(audits) == LABELS
+    for (_, name, world, label), record in zip(STUDY, audits.values()):
         assert record["agree"] and record["written"]["referent"] == name and not record["written"]["leaks"]
         assert record["written"]["episodes"] == 1
     card = (mixed / "README.md").read_text()
-    for name in TYPES:
-        assert f"## `{name}` (world {name})" in card and f"- referent-{name}" in card
-        assert f"python -m gen referent={name} image_size=64 fps=20 profile=libero n=200 seed=3 split=exam" in card
-    assert "python -m gen 'referent=[libero_object,libero_spatial,libero_goal]' n=3 seed=2 image_size=64" in card
+    for _, name, world, label in STUDY:
+        assert f"## `{label}` (world {world})" in card and f"- referent-{name}" in card
+        where = "" if label == name else f" world={world}"
+        assert f"python -m gen referent={name}{where} image_size=64 fps=20 profile=libero n=200 seed=3 split=exam" in card
+    assert f"python -m gen '{MIXED}' n={len(STUDY)} seed=2 image_size=64" in card
 
 
 def test_verify_regenerates_each_type_from_its_spec(mixed: Path) -> None:
-    done = subprocess.run([sys.executable, "-m", "gen.verify", str(mixed), "episodes=3"], capture_output=True, text=True)
-    assert done.returncode == 0 and "episodes [0, 1, 2] regenerate identically" in done.stdout, done.stderr[-2000:]
+    every = len(STUDY)
+    done = subprocess.run([sys.executable, "-m", "gen.verify", str(mixed), f"episodes={every}"], capture_output=True, text=True)
+    assert done.returncode == 0 and f"episodes {list(range(every))} regenerate identically" in done.stdout, done.stderr[-2000:]
 
 
 def _lerobot_train(out: Path, dataset: Path, **policy: object) -> Path:
@@ -128,6 +141,8 @@ def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path:
 
 
 def test_a_killed_mix_resumes_to_the_same_bytes(mixed: Path, tmp_path: Path) -> None:
+    """SIGKILL mid-run (two workers: they die with it, or their open pipes would hold this test
+    forever), then resume=true: the same bytes as the uninterrupted run."""
     out = tmp_path / "ds"
     assert _gen(f"out={out}", crash="episode:1").returncode == -9
     assert not out.exists()
@@ -163,11 +178,13 @@ def test_a_mixed_plan_holds_each_types_own_plan_in_turns(tmp_path: Path) -> None
     [
         (["referent=[object,unicorn]", "n=2"], "unknown referent 'unicorn'"),
         (["referent=[object,color,object]", "n=3"], "referent=[object,color,object] names object 2 times: name each type once"),
-        ([MIXED, "n=4"], f"n=4 cannot be shared equally by the 3 types of {MIXED}: give n=3"),
+        ([MIXED, "n=8"], f"n=8 cannot be shared equally by the 7 types of {MIXED}: give n=7"),
+        (["referent=[color@libero_spatial,verb@libero_object]", "n=2"], "verb@libero_object: referent verb has no design"),
+        (["referent=[color@libero_spatial,color@libero_spatial]", "n=2"], "names color@libero_spatial 2 times"),
         (["referent=[object,color]", "n=3"], "give n=2 or n=4"),
         (["referent=[object,libero_object]", "n=2"], "object records profile native"),
         (["referent=[]"], "referent=[] names no referent type"),
-        ([MIXED, "n=3", "split=exam"], "split=exam makes one exam per referent type"),
+        ([MIXED, "n=7", "split=exam"], "split=exam makes one exam per referent type"),
     ],
 )
 def test_bad_lists_are_refused_in_one_line(
