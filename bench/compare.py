@@ -2,6 +2,7 @@
 
     python bench/compare.py [n=50] ['sizes=[10,50,200]'] [referent=object]
     python bench/compare.py world=libero_object [n=10]
+    python bench/compare.py world=libero_spatial referent=color [n=10]
 
 (a) ours: `python -m gen` (plan, oracle demos, render from the recorded states, per-episode
     encoding, LeRobot files), with 1 worker and with the machine's cores;
@@ -13,9 +14,10 @@
 Prints seconds per episode, the ratios (b)/(a) and (a)/(c), per-worker peak memory, and how (a)'s
 wall time grows with n.
 
-With `world=libero_object` it compares, side by side in one run, (a) ours in LIBERO-Object's
-scenes (referent libero_object, 2 cameras at 256 px, 1 worker) with (d) LIBERO's own path to
-the same number of frames per episode: LIBERO's `OffScreenRenderEnv.step` with both cameras'
+With a LIBERO world (`world=libero_object`, or libero_spatial, libero_goal) it compares, side by
+side in one run, (a) ours in that world's scenes (its own LIBERO type, or `referent=` another axis
+it carries, 2 cameras at 256 px, 1 worker) with (d) LIBERO's own path to the same number of frames
+per episode: LIBERO's `OffScreenRenderEnv.step` in the suite's first task, with both cameras'
 observations at 256 px (in LIBERO's own environment, `.venv-libero`, through
 scripts/libero_reference.py), the frames then written by lerobot's `LeRobotDataset` writer.
 """
@@ -34,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults)
-from core import parquet
+import referents
+from core import parquet, worlds
 from core.layout import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
 from gen import scenes
@@ -45,21 +48,23 @@ from gen.run import generate
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def ours(n: int, workers: int, referent: str, root: Path, size: int = 128) -> tuple[float, Path]:
+def ours(n: int, workers: int, referent: str, root: Path, size: int = 128, world: str | None = None) -> tuple[float, Path]:
     out = root / f"ours-{n}-{workers}-{time.perf_counter_ns()}"
+    where = [f"world={world}"] if world else []
     start = time.perf_counter()
-    generate(parse([f"referent={referent}", f"n={n}", f"workers={workers}", f"out={out}", f"image_size={size}"]), progress=False)
+    options = [f"referent={referent}", *where, f"n={n}", f"workers={workers}", f"out={out}", f"image_size={size}"]
+    generate(parse(options), progress=False)
     return time.perf_counter() - start, out
 
 
-def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type) -> tuple[float, float]:  # noqa: N803
+def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type, suite: str) -> tuple[float, float]:  # noqa: N803
     """LIBERO's own path to the frames: its environment stepped with camera observations (seconds,
     measured in LIBERO's environment), then lerobot's writer on those frames (seconds)."""
     import json
     import subprocess
 
     request, frames = root / "libero-bench.json", root / "libero-bench.npz"
-    request.write_text(json.dumps({"suite": "libero_object", "task": 0, "size": size, "lengths": lengths}))
+    request.write_text(json.dumps({"suite": suite, "task": 0, "size": size, "lengths": lengths}))
     reference = ROOT / ".venv-libero" / "bin" / "python"
     if not reference.is_file():
         raise UserError(f"{reference} is missing: `make setup` builds LIBERO's reference environment")
@@ -93,7 +98,7 @@ def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type)
                     **{LIBERO.image_key(c): frames[t][::-1, ::-1] for c, frames in cameras.items()},
                     STATE_KEY: np.zeros(LIBERO.state_size, np.float32),
                     ACTION_KEY: np.zeros(LIBERO.action_size, np.float32),
-                    "task": "pick up the alphabet soup and place it in the basket",
+                    "task": "a LIBERO task",
                 }
             )
             t += 1
@@ -176,8 +181,8 @@ def naive(lengths: list[int], root: Path, LeRobotDataset: type) -> float:  # noq
 class CompareOptions:
     n: int = 50  # episodes for (a), (b) and (c)
     sizes: list[int] = field(default_factory=lambda: [10, 50, 200])  # values of n to time (a) at with every core
-    referent: str = "object"  # a referent type (referents/<type>.yaml)
-    world: str = "native"  # native, or libero_object: ours in LIBERO-Object's scenes against LIBERO's own path
+    referent: str | None = None  # a referent type the world carries (default: object natively, a LIBERO world's own type)
+    world: str = "native"  # native, or a LIBERO world: ours in its scenes against LIBERO's own path
 
 
 def compare(options: CompareOptions) -> None:
@@ -190,7 +195,7 @@ def compare(options: CompareOptions) -> None:
 
     if options.world != "native":
         return compare_libero(options, LeRobotDataset)
-    n, referent = options.n, options.referent
+    n, referent = options.n, options.referent or "object"
     cores = os.cpu_count() or 1
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -216,17 +221,23 @@ def compare(options: CompareOptions) -> None:
 
 
 def compare_libero(options: CompareOptions, LeRobotDataset: type) -> None:  # noqa: N803
-    if options.world != "libero_object":
-        raise UserError(f"world must be native or libero_object, got {options.world!r}")
+    try:
+        world = worlds.world(options.world)
+    except worlds.UnknownWorld as exc:
+        raise UserError(str(exc)) from None
+    if not world.suite:
+        raise UserError(f"world must be native or a LIBERO world, got {options.world!r}")
+    referent = options.referent or referents.of_world(world.name)[0]
     n, size = options.n, LIBERO.image_size
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        a, dataset = ours(n, 1, "libero_object", root, size)
+        a, dataset = ours(n, 1, referent, root, size, world.name)
         lengths = [int(x) for x in parquet.read(dataset / "meta/episodes")["length"]]
-        stepping, writing = liberos_own(lengths, size, root, LeRobotDataset)
+        stepping, writing = liberos_own(lengths, size, root, LeRobotDataset, world.suite)
         d, frames = stepping + writing, sum(lengths)
-        print(f"{n} libero_object episodes, {frames} frames ({frames / n:.1f}/episode), 2 cameras at {size} px, 1 worker")
-        print(f"(a) ours (world=libero_object)  {a / n:7.3f} s/episode  {frames / a:6.1f} frames/s")
+        per = frames / n
+        print(f"{n} {referent} episodes in {world.name}, {frames} frames ({per:.1f}/episode), 2 cameras at {size} px, 1 worker")
+        print(f"(a) ours ({referent}, world={world.name})  {a / n:7.3f} s/episode  {frames / a:6.1f} frames/s")
         print(f"(d) LIBERO's own path           {d / n:7.3f} s/episode  {frames / d:6.1f} frames/s")
         step_ms, write_ms = stepping / frames * 1000, writing / frames * 1000
         print(f"    OffScreenRenderEnv.step {step_ms:.0f} ms/step, lerobot's writer {write_ms:.0f} ms/frame")

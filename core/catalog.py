@@ -24,6 +24,7 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 }
 
 
+GRIPPER_SPAN = 0.08  # the Panda's fingers open this far apart: nothing wider across its grasp axis can be picked
 RIM_DEPTH = 0.02  # measured from LIBERO-Spatial's 50 first states: 10 mm let the wall slip in 4, 20 mm in none
 
 
@@ -54,6 +55,12 @@ class Kind:
     quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # resting orientation (w, x, y, z) before the object's yaw
     contain: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # (centre offset, half size)
     rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
+    variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
+    called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
+
+    @property
+    def noun(self) -> str:
+        return self.called or self.name.replace("_", " ")
 
     @property
     def height(self) -> float:
@@ -62,6 +69,10 @@ class Kind:
     def rest_z(self, surface_z: float) -> float:
         """Body-origin height when the object rests on a surface at `surface_z`."""
         return surface_z + self.bottom
+
+    def graspable(self) -> bool:
+        """Whether the open fingers fit across it (a bowl, taken by its wall, always)."""
+        return bool(self.rim) or self.size[0 if self.grasp_axis == "x" else 1] < GRIPPER_SPAN
 
     def grasp_depth(self) -> float:
         """How far below the top the fingers close: near the top for tall objects, and just

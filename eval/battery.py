@@ -39,6 +39,8 @@ from gen.workers import die_with
 
 ROLLOUTS = "rollouts.parquet"
 REPORT_FILES = ("report.json", "report.md", "report.html", ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
+
+
 def _worker(parent: int) -> None:
     """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/workers.py)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -1,4 +1,6 @@
-"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal): an exam on LIBERO's own initial states.
+"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal), or
+`suite=<a LIBERO-PRO suite>` (libero_object_swap, libero_spatial_lan, ...): an exam on LIBERO's
+own initial states.
 
 Its task rows are exactly a LIBERO suite's tasks: LIBERO's initial states (every one of the 50
 per task, or `states=` of them drawn with `seed=`), LIBERO's instructions, the rollout horizon
@@ -9,6 +11,16 @@ in every exam (core/exam.py). A LIBERO-trained policy's task rate here is its pu
 number; its swap rate is whether it reads the instruction. The `position` policy is the
 shortcut LIBERO's layouts reward: it knows the scene and fetches what that task's target was.
 
+A LIBERO-PRO suite perturbs its base suite (objects swapped, moved, recoloured or added; the
+instruction paraphrased or another target named) with its own BDDL problems and initial states;
+its world is its base suite's. Its scene holds the suite's objects, built from their LIBERO
+models (referents/scenery.py), and each task row is given the instruction the suite's BDDL file
+writes in its `(:language ...)` line where that differs from the base task's, which is what the
+perturbation is (LIBERO-PRO keeps the base task's file name, from which LIBERO's benchmark, and
+the runners that use it, take the instruction: they never deliver it); elsewhere the base task's
+instruction. `exam.json` records, per task, the file, its language line, the file-name
+instruction and the one delivered.
+
 The states are LIBERO's exactly (joints set by name from LIBERO's state vectors), so the first
 settle steps show what they show in LIBERO: objects placed slightly into the floor pop up and
 settle.
@@ -18,9 +30,10 @@ from __future__ import annotations
 
 import sys
 import time
+from collections import Counter
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
@@ -41,17 +54,110 @@ if TYPE_CHECKING:
 
 @dataclass
 class CanonicalOptions:
-    world: str = "libero_object"  # a LIBERO world (core/worlds/): its suite's tasks and initial states
-    states: int = 50  # initial states per task (LIBERO has 50); fewer are drawn with `seed`
+    world: Optional[str] = None  # a LIBERO world (core/worlds/): its suite's tasks and initial states; default libero_object
+    states: int = 50  # initial states per task (LIBERO has 50, some LIBERO-PRO suites 10); fewer are drawn with `seed`
     seed: int = 0
     image_size: int = 256  # the cameras' frames, pixels (the exam's policy side)
-    out: str | None = None  # default datasets/<world>-canonical
+    out: Optional[str] = None  # default datasets/<suite>-canonical
     overwrite: bool = False
+    suite: Optional[str] = None  # a LIBERO-PRO suite of the world's (its world is inferred): libero_object_swap, ...
 
 
-def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
+@dataclass(frozen=True)
+class Suite:
+    """A LIBERO suite as an exam: its world, the referent type that lays its tasks out, and the
+    tasks it covers (with why the others are not)."""
+
+    name: str
+    world: worlds.World
+    referent: Referent
+    tasks: tuple[str, ...]
+    left_out: dict[str, str]  # task -> why it is not covered
+
+    def problem(self, task: str) -> libero.Problem:
+        return libero.problem(self.name, task)
+
+    def inventory(self) -> tuple[tuple[str, int], ...]:
+        """The bodies its scene compiles: the referent's, and every kind its covered tasks place, as
+        many as any task places."""
+        most = Counter(dict(self.referent.assets()))
+        for task in self.tasks:
+            for kind, n in Counter(self.problem(task).objects.values()).items():
+                most[kind] = max(most[kind], n)
+        return tuple(sorted(most.items()))
+
+    def instruction(self, task: str, base: str) -> str:
+        """The instruction a task row is given: the BDDL's `(:language)` line where the suite changed
+        it from its base task's (a paraphrase, another target), else `base` (the base task's)."""
+        ours = self.problem(task).language
+        theirs = libero.problem(self.world.suite, libero.base_task(self.name, task)).language
+        return ours if ours and _words(ours) != _words(theirs) else base
+
+
+def _words(text: str) -> list[str]:
+    return text.lower().replace(".", " ").split()
+
+
+def _libero_worlds() -> str:
+    return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
+
+
+def _all_suites() -> str:
+    return ", ".join(s for w in worlds.names() if worlds.world(w).suite for s in libero.suites(worlds.world(w).suite))
+
+
+def _canonical_worlds() -> str:
+    return ", ".join(name for name in worlds.names() if _task_type(name) is not None)
+
+
+def _task_type(world: str) -> str | None:
+    """The referent type of a world that lays out LIBERO's tasks (its `canonical` hook), or None."""
+    return next((r for r in referents.of_world(world) if referents.load(r).code.canonical is not None), None)
+
+
+def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> str | None:
+    """Why a task of a suite is not covered (None: it is): a model LIBERO-PRO does not ship, furniture
+    other than the world's, a task our skills cannot do, no initial states, its destination moved out of reach."""
+    problem = libero.problem(suite, task)
+    missing = sorted(set(problem.objects.values()) - set(world.kinds))
+    if missing:
+        shipped = [k for k in missing if any(libero.assets_root().glob(f"*/{k}/{k}.xml"))]
+        if shipped:
+            return f"world {world.name} has no kind for {', '.join(shipped)} yet (core/worlds/libero.py)"
+        return f"no model of {', '.join(missing)} is installed (LIBERO-PRO registers it but ships no file)"
+    furniture = {f.fixture.kind for f in world.fixtures}
+    other = sorted(set(problem.fixtures.values()) - furniture - {"table", "floor"})
+    if other:
+        return f"its furniture ({', '.join(other)}) is not world {world.name}'s"
+    assert referent.code.canonical is not None
+    design = referent.code.canonical(referent.config, problem)
+    if design is None:
+        return f"our skills cannot do it ({problem.goal[0][0]} {' '.join(problem.goal[0][1:])}: see the README's coverage)"
+    carried = design.task.params.get("object", design.target) if design.task else design.target
+    carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
+    if carried_kind.model != "site" and not carried_kind.graspable():
+        return f"its {carried_kind.name} is wider than the Panda's fingers open"
+    if not len(libero.initial_states(suite, task)):
+        return "its initial-state file is empty"
+    x0, x1, y0, y1 = world.reach
+    for name in problem.goal[0][1:]:
+        instance = name.removesuffix("_contain_region")
+        regions = [pred[2] for pred in problem.init if len(pred) == 3 and pred[1] == instance]
+        if instance in problem.objects and regions and any(r.split("_", 1)[-1] in problem.regions for r in regions):
+            x, y = problem.centre(problem.region_of(instance))
+            if not (x0 - 0.2 <= x <= x1 + 0.2 and y0 - 0.2 <= y <= y1 + 0.2):
+                return f"LIBERO-PRO parks {instance}, which the goal names, off the scene"
+    return None
+
+
+def suite_of(options: CanonicalOptions) -> Suite:
+    """The options' suite, checked (bad input: UserError, one line)."""
+    name = options.suite or (options.world or "libero_object")
+    base = libero.base_suite(name)
+    if options.suite and base not in worlds.names():
+        raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
     try:
-        world = worlds.world(options.world)
+        world = worlds.world(options.world or base)
     except worlds.UnknownWorld as exc:
         raise UserError(str(exc)) from None
     if not world.suite:
@@ -60,36 +166,44 @@ def _options(options: CanonicalOptions) -> tuple[worlds.World, Referent, Path]:
         world.requires()
     except worlds.WorldUnavailable as exc:
         raise UserError(f"world={world.name}: {exc}") from None
-    check_seed(options.seed)
-    if not 1 <= options.states <= 50:
-        raise UserError(f"states must be between 1 and 50 (LIBERO's initial states per task), got {options.states}")
-    if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
-        raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
-    out = Path(options.out or f"datasets/{world.name}-canonical")
-    check_output(out, options.overwrite)
-    types = [r for r in referents.of_world(world.name) if referents.load(r).code.canonical is not None]
-    if not types:
+    if options.world and options.suite and base != world.suite:
+        raise UserError(f"suite={options.suite} perturbs {base}, not world={options.world}: leave world= out")
+    if name not in libero.suites(world.suite):
+        raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
+    chosen = _task_type(world.name)
+    if chosen is None:
         raise UserError(
             f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}"
         )
-    return world, referents.load(types[0]), out
+    referent = referents.load(chosen)
+    why = {task: _why_not(world, referent, name, task) for task in libero.tasks(name)}
+    covered = tuple(task for task, reason in why.items() if reason is None)
+    if not covered:
+        reasons = Counter(why.values()).most_common(1)[0][0]
+        raise UserError(f"suite {name} has no task our skills and LIBERO's installed models can do: {reasons}")
+    return Suite(name, world, referent, covered, {t: r for t, r in why.items() if r is not None})
 
 
-def _libero_worlds() -> str:
-    return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
+def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
+    suite = suite_of(options)
+    check_seed(options.seed)
+    fewest = min(len(libero.initial_states(suite.name, t)) for t in suite.tasks)
+    if not 1 <= options.states <= fewest:
+        raise UserError(f"states must be between 1 and {fewest} ({suite.name}'s initial states per task), got {options.states}")
+    if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
+        raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
+    out = Path(options.out or f"datasets/{suite.name}-canonical")
+    check_output(out, options.overwrite)
+    return suite, out
 
 
-def _canonical_worlds() -> str:
-    return ", ".join(name for name in worlds.names() if any(referents.load(r).code.canonical for r in referents.of_world(name)))
-
-
-def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:
+def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:
     """A LIBERO task's scene as an episode spec (the referent type's `canonical` design of it):
     its objects under the design's ids, each where the task's region puts it until the initial
-    state poses it, LIBERO's instruction, the swaps."""
-    problem = libero.problem(world.suite, task)
+    state poses it, the instruction the suite delivers, the swaps."""
+    referent, world = suite.referent, suite.world
     assert referent.code.canonical is not None
-    design = referent.code.canonical(referent.config, problem)
+    design = referent.code.canonical(referent.config, suite.problem(task))
     if design is None:
         raise ValueError(f"{task} is not one of referent {referent.name}'s tasks")
     objects = []
@@ -106,10 +220,10 @@ def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, s
         seed=seed,
         objects=tuple(objects),
         target=design.target,
-        instruction=design.instruction,
+        instruction=suite.instruction(task, libero.language(libero.base_task(suite.name, task))),
         template=design.template,
         counterfactuals=design.counterfactuals,
-        assets=referent.assets(),
+        assets=suite.inventory(),
         task=design.task or referent.config.task,
         sim=sim,
         split="exam",
@@ -117,55 +231,55 @@ def trial_spec(referent: Referent, world: worlds.World, task: str, index: int, s
 
 
 def covered(referent: Referent, world: worlds.World) -> list[str]:
-    """The suite's tasks the referent type can lay out (LIBERO-Goal's drawers and knob are not)."""
-    canonical = referent.code.canonical
-    assert canonical is not None
-    return [t for t in libero.tasks(world.suite) if canonical(referent.config, libero.problem(world.suite, t)) is not None]
+    """The base suite's tasks the referent type can lay out (LIBERO-Goal's drawers and knob are not)."""
+    return list(suite_of(CanonicalOptions(world=world.name)).tasks)
 
 
 def build(options: CanonicalOptions) -> None:
-    world, referent, out = _options(options)
+    suite, out = _options(options)
     from tqdm import tqdm
 
     from oracle.scene import scene_for
 
     started = time.perf_counter()
+    world = suite.world
     profile = layout(world.profiles[0])
     sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name)
-    tasks = covered(referent, world)
     rng = np.random.default_rng(options.seed)
-    chosen = {task: sorted(rng.choice(50, options.states, replace=False).tolist()) for task in tasks}
-    scene = scene_for(referent.assets(), profile.name, world.name)
+    chosen = {
+        task: sorted(rng.choice(len(libero.initial_states(suite.name, task)), options.states, replace=False).tolist())
+        for task in suite.tasks
+    }
+    scene = scene_for(suite.inventory(), profile.name, world.name)
     rows, specs = [], []
-    bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{world.suite} initial states", unit="state")
-    for task in tasks:
+    bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
+    for task in suite.tasks:
         for s in chosen[task]:
-            spec = load_state(scene, referent, world, task, s, sim, len(specs), options.seed)
-            values = {a.id: a.value for a in referent.alternatives(spec)}
+            spec = load_state(scene, suite, task, s, sim, len(specs), options.seed)
+            values = {a.id: a.value for a in suite.referent.alternatives(spec)}
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
             rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, scene.settled(spec))
             specs.append(spec)
             bar.update()
     bar.close()
-    report = audit(referent, specs)
+    report = audit(suite.referent, specs)
     with staging(out) as root:
         root.mkdir(parents=True)
-        exam.write(root, rows, _header(options, world, referent, profile.name, sim, chosen, report))
+        exam.write(root, rows, _header(options, suite, profile.name, sim, chosen, report))
+    left = f"; left out: {len(suite.left_out)} task(s) (exam.json says why)" if suite.left_out else ""
     print(
-        f"wrote an exam of {len(specs)} LIBERO initial states ({len(tasks)} tasks x {options.states}) to {out} "
-        f"in {time.perf_counter() - started:.1f} s\ntake it with: python -m eval policy=<policy> exam={out}"
+        f"wrote an exam of {len(specs)} LIBERO initial states ({len(suite.tasks)} tasks x {options.states}) of {suite.name} "
+        f"to {out} in {time.perf_counter() - started:.1f} s{left}\ntake it with: python -m eval policy=<policy> exam={out}"
     )
 
 
-def load_state(
-    scene: Scene, referent: Referent, world: worlds.World, task: str, state: int, sim: SimSettings, index: int = 0, seed: int = 0
-) -> EpisodeSpec:
+def load_state(scene: Scene, suite: Suite, task: str, state: int, sim: SimSettings, index: int = 0, seed: int = 0) -> EpisodeSpec:
     """Put `scene` in a LIBERO task's initial state number `state` (joints set by name from
     LIBERO's state vector); returns the trial's spec, its objects posed as that state poses them."""
-    problem = libero.problem(world.suite, task)
-    vector = libero.initial_states(world.suite, task)[state]
-    spec = _posed(trial_spec(referent, world, task, index, seed, sim), vector, problem, world)
+    problem = suite.problem(task)
+    vector = libero.initial_states(suite.name, task)[state]
+    spec = _posed(trial_spec(suite, task, index, seed, sim), vector, problem, suite.world)
     scene.reset(spec)
     scene.set_joints(*libero.split_state(vector, problem))
     return spec
@@ -182,21 +296,32 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
     return replace(spec, objects=(*objects, *spec.objects[len(objects) :]))  # places on furniture stay
 
 
-def _header(
-    options: CanonicalOptions, world: worlds.World, referent: Referent, profile: str, sim: SimSettings, chosen: dict, report: dict
-) -> dict:
-    features = layout(profile)
+def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSettings, chosen: dict, report: dict) -> dict:
+    features, world, referent = layout(profile), suite.world, suite.referent
+    named = f"suite={suite.name}" if suite.name != world.suite else f"world={world.name}"
+    tasks = {}
+    for task in suite.tasks:
+        problem, base = suite.problem(task), libero.base_task(suite.name, task)
+        tasks[task] = {
+            "bddl": f"bddl_files/{suite.name}/{task}.bddl",
+            "language_line": problem.language,
+            "file_name_instruction": libero.language(task),
+            "instruction": suite.instruction(task, libero.language(base)),
+            "base_task": base,
+        }
     return {
         "referent": referent.name,
         "seed": options.seed,
         "split": "exam",
-        "command": f"python -m gen.canonical world={world.name} states={options.states} seed={options.seed} "
-        f"image_size={options.image_size}",
+        "command": f"python -m gen.canonical {named} states={options.states} seed={options.seed} image_size={options.image_size}",
         "profile": profile,
         "world": world.name,
         "canonical": {
-            "suite": world.suite,
+            "suite": suite.name,
+            "base_suite": world.suite,
             "states": {task: states for task, states in chosen.items()},
+            "tasks": tasks,
+            "left_out": suite.left_out,
             "episode_steps": world.episode_steps,
             "settle_steps": features.settle_steps,
         },

@@ -15,6 +15,7 @@ import numpy as np
 from core import worlds
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from core.worlds import libero
+from referents import scenery
 from referents.balance import Balance
 from referents.compose import slug
 from referents.design import Design, Placement
@@ -125,11 +126,12 @@ def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Can
     """The place a BDDL name means: an object of the problem, or a fixture's site."""
     world = worlds.world(cfg.world)
     kind = problem.objects.get(name)
+    base = scenery.base_kind(cfg, kind) if kind is not None else None
     return next(
         (
             c
             for c in cfg.role("destination") + cfg.role("object")
-            if c.kind == kind or world.kind(c.kind).params.get("site") == name
+            if c.kind == base or world.kind(c.kind).params.get("site") == name
         ),
         None,
     )
@@ -143,7 +145,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
     if predicate.lower() != "on" or len(problem.goal) != 1:
         return None
     carried, destination = problem.objects.get(args[0]), _destination(cfg, problem, args[1])
-    carried_name = next((c.name for c in cfg.role("object") if c.kind == carried), None)
+    carried_name = scenery.candidate(cfg, carried).name if carried is not None else None
     if carried_name is None or destination is None or destination.name not in _goals(cfg).get(carried_name, []):
         return None
     slots = cfg.layout.slots
@@ -152,7 +154,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
         x, y = problem.centre(problem.region_of(instance))
         table = _table_slots(cfg)
         slot = table[int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in (slots[s] for s in table)]))]
-        placements.append(Placement(instance, next(c for c in cfg.objects if c.kind == kind), slot))
+        placements.append(Placement(instance, scenery.candidate(cfg, kind), slot))
     placements += _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}
     template = cfg.templates[0]
@@ -179,13 +181,13 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     suite = worlds.world(cfg.world).suite
     problem = libero.problem(suite, libero.tasks(suite)[0])
     remembered = {problem.objects[i]: problem.centre(problem.region_of(i)) for i in problem.objects}
-    table = [o for o in spec.objects if o.kind in remembered]
+    table = [o for o in spec.objects if scenery.base_kind(cfg, o.kind) in remembered]
 
     def nearest(kind: str, besides: str = "") -> str:
-        x, y = remembered[kind]
+        x, y = remembered[scenery.base_kind(cfg, kind)]
         return min((o for o in table if o.id != besides), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y)).id
 
     named = spec.object(spec.target)
-    destination = nearest(named.kind) if named.kind in remembered else named.id
+    destination = nearest(named.kind) if scenery.base_kind(cfg, named.kind) in remembered else named.id
     carried = nearest(spec.object(spec.task.params["object"]).kind, besides=destination)
     return replace(spec, target=destination, task=replace(spec.task, params={**spec.task.params, "object": carried}))

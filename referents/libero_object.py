@@ -16,7 +16,7 @@ import numpy as np
 from core import worlds
 from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from core.worlds import libero
-from referents import destination
+from referents import destination, scenery
 from referents.balance import Balance
 from referents.compose import fill, naming_design
 from referents.design import Design, Placement
@@ -79,26 +79,25 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
     """A LIBERO-Object task's scene: its objects (each in the slot nearest its region), LIBERO's
     instruction, and a swap to every other grocery (LIBERO-PRO's one rename per task,
     `libero_object_task`, is one of them), said as LIBERO says it."""
-    names = {c.kind: c for c in cfg.objects}
     container = _container(cfg)
     placements = []
     for instance, kind in problem.objects.items():
         x, y = problem.centre(problem.region_of(instance))
         slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy in cfg.layout.slots]))
-        placements.append(Placement(kind, names.get(kind, container), slot))
+        known = scenery.base_kind(cfg, kind) == container.kind
+        placements.append(Placement(kind, replace(container, kind=kind) if known else scenery.candidate(cfg, kind), slot))
     target = problem.objects[problem.goal[0][1]]  # (In <target> <container>_contain_region)
     destination = problem.objects[problem.goal[0][2].removesuffix("_contain_region")]
     template = cfg.templates[0]
     say = template.format
-    others = [p for p in placements if p.id not in (target, destination)]
+    named = scenery.candidate(cfg, target).name
+    others = [p for p in placements if p.id not in (target, destination) and p.candidate.role != scenery.SCENERY]
     return Design(
         placements=tuple(placements),
         target=target,
         template=template,
         instruction=libero.language(problem.name),
-        counterfactuals=tuple(
-            Counterfactual(say(name=p.candidate.name), p.id, (names[target].name, p.candidate.name)) for p in others
-        ),
+        counterfactuals=tuple(Counterfactual(say(name=p.candidate.name), p.id, (named, p.candidate.name)) for p in others),
         task=TaskSpec(program=cfg.task.program, params={"destination": destination}),
     )
 
@@ -108,7 +107,8 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     the scene by its groceries and fetches whatever stands in that task's target region (a
     scene of no LIBERO task: region 0, the target region of half of them)."""
     destination = spec.task.params["destination"]
-    groceries = {o.kind for o in spec.objects if o.id != destination}
+    known = {c.kind for c in cfg.objects}  # it knows LIBERO's groceries (a recoloured one as itself), not what was added
+    groceries = {scenery.base_kind(cfg, o.kind) for o in spec.objects if o.id != destination} & known
     suite, slot = worlds.world(cfg.world).suite, 0
     for task in libero.tasks(suite):
         problem = libero.problem(suite, task)

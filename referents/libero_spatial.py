@@ -19,6 +19,7 @@ import numpy as np
 from core import worlds
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from core.worlds import libero
+from referents import scenery
 from referents.balance import Balance
 from referents.design import Design, Placement
 from referents.features import POSITION, Alternative, Feature, object_alternatives
@@ -134,8 +135,10 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
 
 
 def _place_of(cfg: ReferentConfig, obj: SceneObject) -> _Place:
-    """The place a bowl of a scene stands in (its `relation`)."""
-    return next(p for p in _places(cfg, elsewhere=True) if p.says == obj.attributes[cfg.naming])
+    """The place a bowl of a scene stands in (its `relation`; a region no place names, where
+    LIBERO-PRO's `_swap` moved it, is its own place)."""
+    said = obj.attributes[cfg.naming]
+    return next((p for p in _places(cfg, elsewhere=True) if p.says == said), _Place(None, said, frozenset(), said))
 
 
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
@@ -152,29 +155,48 @@ def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
     return [(c.kind, 2 if c.role == "referent" else 1) for c in cfg.objects]
 
 
-def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
-    """A LIBERO-Spatial task's scene: its objects under LIBERO's instance names (each in the slot
-    of its place), LIBERO's instruction, and the swap to the other bowl, named by its own place."""
+def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
+    """A LIBERO-Spatial task's scene (LIBERO-PRO's too: referents/scenery.py): its objects under
+    LIBERO's instance names (each in the slot of its place), LIBERO's instruction, and the swap to
+    the other bowl, named by its own place."""
     at = {p.region: p for p in _places(cfg, elsewhere=True)}
-    names = {c.kind: c for c in cfg.objects}
-    where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+    copies = {kind: scenery.base_kind(cfg, kind) for kind in problem.objects.values()}
+
+    def plain(region: str) -> str:  # LIBERO-PRO names a region after a recoloured copy: `between_yellow_plate_...`
+        if region in at:
+            return region
+        for kind, base in copies.items():
+            region = region.replace(f"_{kind}_", f"_{base}_")
+        return region
+
+    where = {pred[1]: plain(pred[2]) for pred in problem.init if pred[0].lower() in ("on", "in")}
     target = problem.goal[0][1]  # (On <bowl> plate_1)
+    bowl = _bowl(cfg).kind
     placements = []
     for instance, kind in problem.objects.items():
-        place = at.get(where.get(instance, ""))
-        fixed = next((p.slot for p in _others(cfg) if p.candidate.kind == kind), None)
+        region = where.get(instance, "")
+        place = at.get(region, _Place(None, region, frozenset(), region)) if scenery.base_kind(cfg, kind) == bowl else None
+        fixed = next((p.slot for p in _others(cfg) if p.candidate.kind == scenery.base_kind(cfg, kind)), None)
         slot = fixed if fixed is not None else (place.slot if place is not None and place.slot is not None else 0)
-        placements.append(Placement(instance, _standing(cfg, place) if place is not None else names[kind], slot))
-    other = next(p.id for p in placements if p.candidate.kind == names[problem.objects[target]].kind and p.id != target)
+        named = replaced(_standing(cfg, place), kind=kind) if place is not None else scenery.candidate(cfg, kind)
+        placements.append(Placement(instance, named, slot))
+    if problem.objects.get(target) is None or scenery.base_kind(cfg, problem.objects[target]) != bowl:
+        return None  # LIBERO-PRO's `_task` asks for another bowl than LIBERO's places name
+    other = next(p.id for p in placements if scenery.base_kind(cfg, p.candidate.kind) == bowl and p.id != target)
     template = cfg.templates[0]
+    said = at.get(where[target])
+    # the swap names the other bowl by its place, where a place's words say where it stands
+    swap = (
+        (Counterfactual(_say(template, at[where[other]]), other, (said.says if said else where[target], at[where[other]].says)),)
+        if where[other] in at
+        else ()
+    )
     return Design(
         placements=tuple(placements),
         target=target,
         template=template,
         instruction=libero.language(problem.name),
-        counterfactuals=(
-            Counterfactual(_say(template, at[where[other]]), other, (at[where[target]].says, at[where[other]].says)),
-        ),
+        counterfactuals=swap,
         task=TaskSpec(program=cfg.task.program, params={"destination": problem.goal[0][2]}),
     )
 
@@ -183,14 +205,15 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     """What a policy that learnt LIBERO-Spatial's layouts instead of its words does: it fetches
     the bowl standing where LIBERO's first task whose bowls stand as these do puts its named bowl
     (a pair of places no task uses: where the first task naming either place puts it)."""
-    bowls = {_place_of(cfg, o).region: o.id for o in spec.objects if o.kind == _bowl(cfg).kind}
+    bowl = _bowl(cfg).kind
+    bowls = {_place_of(cfg, o).region: o.id for o in spec.objects if scenery.base_kind(cfg, o.kind) == bowl}
     suite = worlds.world(cfg.world).suite
     layouts = []
     for task in libero.tasks(suite):
         problem = libero.problem(suite, task)
         where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
         named = where[problem.goal[0][1]]
-        layouts.append(({where[i] for i, k in problem.objects.items() if k == _bowl(cfg).kind}, named))
+        layouts.append(({where[i] for i, k in problem.objects.items() if k == bowl}, named))
     remembered = next((named for regions, named in layouts if regions == set(bowls)), None)
     remembered = remembered or next((named for _, named in layouts if named in bowls), next(iter(bowls)))
     return replaced(spec, target=bowls[remembered])

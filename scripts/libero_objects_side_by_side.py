@@ -5,7 +5,7 @@ inside the object's own pixels (the README's picture, docs/libero_objects_side_b
 
 `before` is a git revision: its tree is exported to a temporary folder and this script renders our
 frames there (`python <copy of this script> frames <request> <theirs> <out>`, which uses only what
-both revisions have: scene_for, load_state, Cameras.render).
+both revisions have: scene_for, load_state in either form, Cameras.render).
 """
 
 from __future__ import annotations
@@ -59,7 +59,6 @@ def our_frames(world_name: str, cases: list[list[int]], theirs: np.lib.npyio.Npz
     from core import worlds
     from core.layout import LIBERO
     from core.worlds import libero
-    from gen.canonical import load_state
     from gen.plan import default_sim
     from oracle.render import Cameras
     from oracle.scene import scene_for
@@ -71,12 +70,26 @@ def our_frames(world_name: str, cases: list[list[int]], theirs: np.lib.npyio.Npz
         for name, *pose in theirs[f"{task}-{state}-fixtures"].tolist():  # LIBERO draws these at each reset
             body = scene.model.body(f"{name}_main").id
             scene.model.body_pos[body], scene.model.body_quat[body] = pose[:3], pose[3:]
-        load_state(scene, referent, world, libero.tasks(world.suite)[task], state, default_sim(referent))
+        _load(scene, referent, world, libero.tasks(world.suite)[task], state, default_sim(referent))
         out |= {f"{task}-{state}-{c}": f.copy() for c, f in cameras.render().items()}
         if labels:
             out |= {f"{task}-{state}-{c}-labels": f for c, f in cameras.labels().items()}
     cameras.close()
     return out
+
+
+def _load(scene, referent, world, task: str, state: int, sim) -> None:  # noqa: ANN001
+    """gen.canonical's load_state as the running revision has it: of a suite (now), or of a
+    referent and a world (revisions before LIBERO-PRO's suites)."""
+    import inspect
+
+    from gen import canonical
+
+    if "suite" in inspect.signature(canonical.load_state).parameters:
+        suite = canonical.suite_of(canonical.CanonicalOptions(world=world.name))
+        canonical.load_state(scene, suite, task, state, sim)
+    else:
+        canonical.load_state(scene, referent, world, task, state, sim)
 
 
 def _before(revision: str, world: str, cases: list[list[int]], theirs: Path, tmp: Path) -> dict:

@@ -68,12 +68,16 @@ def _env(bddl: str, size: int, cameras: bool = True):  # noqa: ANN202  (LIBERO i
     return env
 
 
-def _task_bddl(suite: str, task: int) -> tuple[str, object]:
+def _task_bddl(suite: str, task: int | str) -> tuple[str, np.ndarray]:
+    """A task's BDDL file and LIBERO's initial states of it: the task by its number in LIBERO's
+    benchmark order, or by name (LIBERO-PRO's suites the benchmark does not list)."""
     from libero.libero import benchmark, get_libero_path
 
-    bench = benchmark.get_benchmark_dict()[suite]()
-    t = bench.get_task(task)
-    return os.path.join(get_libero_path("bddl_files"), t.problem_folder, t.bddl_file), bench
+    if isinstance(task, int):
+        task = benchmark.get_benchmark_dict()[suite]().get_task(task).name
+    with np.load(os.path.join(get_libero_path("init_states"), suite, f"{task}.pruned_init.npz")) as npz:
+        states = np.asarray(npz["states"])
+    return os.path.join(get_libero_path("bddl_files"), suite, f"{task}.bddl"), states
 
 
 def _positions(env) -> list[list]:  # noqa: ANN001
@@ -145,10 +149,10 @@ def render(request: dict, out: str) -> None:
     by_task: dict[int, list[int]] = {}
     for task, state in request["cases"]:
         by_task.setdefault(task, []).append(state)
+    names = request.get("tasks")  # a task is its number in LIBERO's benchmark order, or in this list of names
     for task, states in by_task.items():
-        bddl, bench = _task_bddl(request["suite"], task)
+        bddl, initial = _task_bddl(request["suite"], names[task] if names else task)
         env = _env(bddl, request["size"])
-        initial = bench.get_task_init_states(task)
         for state in states:
             obs = env.set_init_state(initial[state])
             things = [*env.env.objects_dict, *env.env.fixtures_dict]
@@ -358,9 +362,9 @@ def bench(request: dict, out: str) -> None:
     """Episodes of `lengths` steps with both cameras' observations, each from a reset environment
     set to the task's first initial state; only the steps are timed (resets are not: LIBERO's
     path is charged less than it costs)."""
-    bddl, bench = _task_bddl(request["suite"], request["task"])
+    bddl, states = _task_bddl(request["suite"], request["task"])
     env = _env(bddl, request["size"])
-    state = bench.get_task_init_states(request["task"])[0]
+    state = states[0]
     env.set_init_state(state)
     env.step(np.zeros(7))  # the first step compiles robosuite's controller (numba): not timed
     frames = {cam: [] for cam in CAMERAS}

@@ -13,11 +13,13 @@ import mujoco
 import numpy as np
 
 from core.layout import LIBERO, NATIVE
-from core.worlds import World
+from core.worlds import World, libero
+from gen.canonical import CanonicalOptions, load_state, suite_of
 from gen.config import parse
+from gen.plan import world_sim
 from gen.run import generate
 from oracle.render import Cameras
-from oracle.scene import Scene
+from oracle.scene import Scene, scene_for
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -76,6 +78,39 @@ class Pictures:
         ]
         excess, name, camera, figure, where = max(over)
         assert excess <= 0, f"{name} in {camera} at {where}: {figure:.1f}/255 inside its pixels, {excess:.1f} over its bound"
+
+
+def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: Path) -> tuple[Pictures, float]:
+    """Our frames against LIBERO's own render at LIBERO's initial states of a suite (LIBERO's or
+    LIBERO-PRO's): `cases` are (task number in the suite's order, state); the fixtures posed as
+    LIBERO drew them for each. Returns the pictures' figures and the farthest any object stands
+    from where LIBERO puts it (m)."""
+    chosen = suite_of(CanonicalOptions(suite=suite))
+    names = list(libero.tasks(suite))
+    request = {"suite": suite, "size": LIBERO.image_size, "cases": [list(c) for c in cases], "tasks": names}
+    theirs = np.load(liberos_own("render", request, tmp_path / f"{suite}.npz"), allow_pickle=True)
+    sim = world_sim(chosen.world)
+    scene = scene_for(chosen.inventory(), sim.profile, chosen.world.name)
+    cameras, m = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), scene.model
+    kept = {f.name: (m.body(f"{f.name}_main").id,) for f in chosen.world.fixtures}
+    kept = {name: (b, m.body_pos[b].copy(), m.body_quat[b].copy()) for name, (b,) in kept.items()}
+    pictures, farthest = Pictures(), 0.0
+    try:
+        for t, s in cases:
+            for name, *pose in theirs[f"{t}-{s}-fixtures"].tolist():  # LIBERO draws its fixtures anew at each reset
+                body = m.body(f"{name}_main").id
+                m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
+            spec = load_state(scene, chosen, names[t], s, sim)
+            pictures.compare(cameras, theirs, f"{t}-{s}", f"{suite} task {t} state {s}")
+            ours = {instance: scene.object_pos(o.id) for o, instance in zip(spec.objects, chosen.problem(names[t]).objects)}
+            for instance, *pos in theirs[f"{t}-{s}-objects"]:
+                farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
+    finally:
+        for body, pos, quat in kept.values():
+            m.body_pos[body], m.body_quat[body] = pos, quat
+        cameras.close()
+    print(f"{suite}: farthest object {farthest * 1000:.3f} mm")
+    return pictures, farthest
 
 
 def liberos_own(command: str, request: dict, out: Path) -> Path:

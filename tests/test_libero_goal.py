@@ -16,19 +16,24 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL c
 import referents
 from core import contact, worlds
 from core.exam import read
-from core.layout import LIBERO
-from core.spec import EpisodeSpec, SceneObject
 from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
 from gen import scenes
 from gen.canonical import covered
-from gen.plan import default_sim, plan, world_sim
-from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
+from gen.plan import default_sim, plan
+from helpers import (
+    PICTURE_STATES,
+    REPLAYS,
+    canonical_reports,
+    initial_state_pictures,
+    liberos_own,
+    liberos_replay,
+    make_dataset,
+)
 from oracle.episode import demonstrate
 from oracle.ik import ArmIK
-from oracle.render import Cameras
-from oracle.scene import Scene, scene_for
+from oracle.scene import scene_for
 from oracle.skills import CARRY_MARGIN
 
 SUITE = "libero_goal"
@@ -43,16 +48,6 @@ from libero_reference import model_arrays  # noqa: E402  (the same readout on bo
 @pytest.fixture(scope="module")
 def world() -> worlds.World:
     return worlds.world(SUITE)
-
-
-def _load(scene: Scene, world: worlds.World, task: int, state: int) -> None:
-    """Our scene in LIBERO-Goal's task `task`, initial state `state`: its objects placed by
-    LIBERO's instance names, every joint set by name from LIBERO's state vector."""
-    problem = libero.problem(SUITE, libero.tasks(SUITE)[task])
-    objects = tuple(SceneObject(instance, kind, kind, 0, (0.0, 0.0, 1.0)) for instance, kind in problem.objects.items())
-    spec = EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), ASSETS, sim=world_sim(world))
-    scene.reset(spec)
-    scene.set_joints(*libero.split_state(libero.initial_states(SUITE, libero.tasks(SUITE)[task])[state], problem))
 
 
 def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
@@ -76,37 +71,11 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
     assert any(":wine_rack_1" in k for k in compared) and len(compared) > 1500
 
 
-def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path, world: worlds.World) -> None:
+def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path) -> None:
     """LIBERO-Goal's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as LIBERO
     drew them: both cameras within 4/255 mean absolute difference, and within 12/255 inside each
     object's and fixture's own pixels (helpers.Pictures); every object within 1 mm."""
-    size = LIBERO.image_size
-    cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
-    theirs = np.load(
-        liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True
-    )
-    scene = scene_for(ASSETS, "libero", SUITE)
-    cameras = Cameras(scene, size, LIBERO.camera_names)
-    m, pictures, farthest = scene.model, Pictures(), 0.0
-    kept = {
-        f.name: (m.body_pos[m.body(f"{f.name}_main").id].copy(), m.body_quat[m.body(f"{f.name}_main").id].copy())
-        for f in world.fixtures
-    }
-    try:
-        for t, s in cases:
-            for name, *pose in theirs[f"{t}-{s}-fixtures"].tolist():
-                body = m.body(f"{name}_main").id
-                m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
-            _load(scene, world, t, s)
-            pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
-            ours = scene.positions()
-            for instance, *pos in theirs[f"{t}-{s}-objects"]:
-                farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))
-    finally:
-        for name, (pos, quat) in kept.items():
-            m.body_pos[m.body(f"{name}_main").id], m.body_quat[m.body(f"{name}_main").id] = pos, quat
-        cameras.close()
-    print(f"farthest object {farthest * 1000:.3f} mm")
+    pictures, farthest = initial_state_pictures(SUITE, [(t, s) for t in range(10) for s in range(PICTURE_STATES)], tmp_path)
     pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 

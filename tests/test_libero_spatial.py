@@ -22,11 +22,17 @@ from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
 from gen import scenes
-from gen.canonical import CanonicalOptions, build, load_state
-from gen.plan import default_sim
-from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
-from oracle.render import Cameras
-from oracle.scene import Scene, scene_for
+from gen.canonical import CanonicalOptions, build
+from helpers import (
+    PICTURE_STATES,
+    REPLAYS,
+    canonical_reports,
+    initial_state_pictures,
+    liberos_own,
+    liberos_replay,
+    make_dataset,
+)
+from oracle.scene import scene_for
 
 SUITE = "libero_spatial"
 # Things whose look our fast rendering cannot reach within helpers.OBJECT_BOUND (README): the stove's
@@ -45,16 +51,6 @@ def world() -> worlds.World:
 @pytest.fixture(scope="module")
 def referent() -> referents.Referent:
     return referents.load(SUITE)
-
-
-def _fixture_poses(scene: Scene, poses: list[list]) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Pose the scene's fixtures as LIBERO drew them ([name, x, y, z, qw, qx, qy, qz]); returns what to restore."""
-    m, kept = scene.model, {}
-    for name, *pose in poses:
-        body = m.body(f"{name}_main").id
-        kept[body] = (m.body_pos[body].copy(), m.body_quat[body].copy())
-        m.body_pos[body], m.body_quat[body] = np.asarray(pose[:3], float), np.asarray(pose[3:], float)
-    return kept
 
 
 def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Referent) -> None:
@@ -81,36 +77,12 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Ref
     assert any(":wooden_cabinet_1_top_level" in k for k in compared) and len(compared) > 1500
 
 
-def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
-    tmp_path: Path, world: worlds.World, referent: referents.Referent
-) -> None:
+def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path) -> None:
     """LIBERO-Spatial's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as
     LIBERO drew them for the picture: both cameras' frames against LIBERO's own (turned 180
     degrees) at most 4/255 mean absolute difference per camera, and 12/255 inside each object's
     and fixture's own pixels (helpers.Pictures); every object within 1 mm."""
-    size = LIBERO.image_size
-    cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
-    theirs = np.load(
-        liberos_own("render", {"suite": SUITE, "size": size, "cases": cases}, tmp_path / "frames.npz"), allow_pickle=True
-    )
-    sim = default_sim(referent)
-    scene = scene_for(referent.assets(), sim.profile, SUITE)
-    cameras = Cameras(scene, size, LIBERO.camera_names)
-    pictures, farthest = Pictures(), 0.0
-    try:
-        for t, s in cases:
-            kept = _fixture_poses(scene, theirs[f"{t}-{s}-fixtures"].tolist())
-            spec = load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-            pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
-            ours = scene.positions()
-            for instance, *pos in theirs[f"{t}-{s}-objects"]:
-                farthest = max(farthest, float(np.abs(np.asarray(ours[instance]) - np.asarray(pos, float)).max()))
-            for body, (pos, quat) in kept.items():
-                scene.model.body_pos[body], scene.model.body_quat[body] = pos, quat
-            assert {o.id for o in spec.objects} == set(libero.problem(SUITE, libero.tasks(SUITE)[t]).objects)
-    finally:
-        cameras.close()
-    print(f"farthest object {farthest * 1000:.3f} mm")
+    pictures, farthest = initial_state_pictures(SUITE, [(t, s) for t in range(10) for s in range(PICTURE_STATES)], tmp_path)
     pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 

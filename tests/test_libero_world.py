@@ -23,10 +23,16 @@ from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
 from gen import scenes
-from gen.canonical import CanonicalOptions, build, load_state
-from gen.plan import default_sim
-from helpers import PICTURE_STATES, REPLAYS, Pictures, canonical_reports, liberos_own, liberos_replay, make_dataset
-from oracle.render import Cameras
+from gen.canonical import CanonicalOptions, build
+from helpers import (
+    PICTURE_STATES,
+    REPLAYS,
+    canonical_reports,
+    initial_state_pictures,
+    liberos_own,
+    liberos_replay,
+    make_dataset,
+)
 from oracle.scene import scene_for
 
 SUITE = "libero_object"
@@ -63,36 +69,15 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Ref
     assert len(compared) > 800  # bodies, joints, colliding geoms, actuators, two cameras, options
 
 
-def test_the_same_pictures_and_poses_at_liberos_own_initial_states(
-    tmp_path: Path, world: worlds.World, referent: referents.Referent
-) -> None:
+def test_the_same_pictures_and_poses_at_liberos_own_initial_states(tmp_path: Path) -> None:
     """LIBERO-Object's first initial states (PICTURE_STATES) of each of its 10 tasks: our frames of both cameras
     (stored mirrored, as the libero profile stores them) against LIBERO's own frames turned
     180 degrees (what lerobot's LiberoProcessorStep and openpi hand a policy): at most 4/255 mean
     absolute difference per camera, and 12/255 inside each object's own pixels (helpers.Pictures);
     every object within 1 mm of where LIBERO puts it."""
-    size = LIBERO.image_size
-    cases = [[t, s] for t in range(10) for s in range(PICTURE_STATES)]
-    request = {"suite": SUITE, "size": size, "cases": cases}
-    theirs = np.load(liberos_own("render", request, tmp_path / "frames.npz"), allow_pickle=True)
-    sim = default_sim(referent)
-    scene = scene_for(referent.assets(), sim.profile, SUITE)
-    cameras = Cameras(scene, size, LIBERO.camera_names)
-    pictures, farthest = Pictures(), 0.0
-    for t, s in cases:
-        load_state(scene, referent, world, libero.tasks(SUITE)[t], s, sim)
-        pictures.compare(cameras, theirs, f"{t}-{s}", f"task {t} state {s}")
-        ours = {world.body_name(body.kind.name, 0): np.asarray(pos) for body, pos in _bodies(scene)}
-        for instance, *pos in theirs[f"{t}-{s}-objects"]:
-            farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
-    cameras.close()
+    pictures, farthest = initial_state_pictures(SUITE, [(t, s) for t in range(10) for s in range(PICTURE_STATES)], tmp_path)
     pictures.check(OWN_BOUNDS)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
-
-
-def _bodies(scene) -> list:  # noqa: ANN001
-    positions = scene.positions()
-    return [(body, positions[i]) for i, body in scene.placed.items()]
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import referents
-from core import catalog
+from core import worlds
 from core.layout import NATIVE
 from core.spec import SimSettings
 from core.worlds.native import TABLE_TOP_Z
@@ -46,11 +46,18 @@ def _extent(model: mujoco.MjModel, data: mujoco.MjData, body_id: int) -> tuple[n
     return pts.min(axis=0), pts.max(axis=0)
 
 
-def test_catalog_extents_match_the_models() -> None:
-    kinds = tuple((name, 1) for name in catalog.KINDS)
-    scene = Scene(kinds)
+@pytest.mark.parametrize("world", ["native", "libero_object"])
+def test_catalog_extents_match_the_models(world: str) -> None:
+    """Every kind's extent and the height of its origin above its lowest point, as planning reads
+    them, against its compiled collision geometry in its resting orientation (LIBERO's kinds: each
+    model LIBERO and LIBERO-PRO register, recoloured and resized copies included)."""
+    kinds = {name: kind for name, kind in worlds.world(world).kinds.items() if kind.model != "site"}
+    scene = Scene(tuple((name, 1) for name in kinds), "native" if world == "native" else "libero", world)
+    for i, (name, kind) in enumerate(kinds.items()):  # apart, in the air, at rest orientation
+        body = scene.bodies[name][0]
+        scene.data.qpos[body.qpos_adr : body.qpos_adr + 7] = [0.4 * i, 3.0, 1.0, *kind.quat]
     mujoco.mj_forward(scene.model, scene.data)
-    for name, kind in catalog.KINDS.items():
+    for name, kind in kinds.items():
         body = scene.bodies[name][0]
         lo, hi = _extent(scene.model, scene.data, body.body_id)
         origin = scene.data.xpos[body.body_id]

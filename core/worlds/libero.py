@@ -113,11 +113,16 @@ KINDS: dict[str, Kind] = {
 }
 
 
-def _recoloured(kind: Kind, name: str) -> Kind:
-    """LIBERO-PRO's copy of a LIBERO object under another color (registered in LIBERO's envs/objects/
-    as its own category): the same mesh and collision boxes, another texture or a flat color."""
+def _recoloured(kind: Kind, name: str, scale: float = 1.0) -> Kind:
+    """LIBERO-PRO's copy of a LIBERO object under another color, or `scale` times bigger (registered
+    in LIBERO's envs/objects/ as its own category): the same mesh and collision boxes (scaled), another
+    texture or a flat color."""
     xml = str(Path(kind.params["xml"]).parent.parent / name / f"{name}.xml")
-    return replace(kind, name=name, params={**kind.params, "xml": xml})
+    size = tuple(v * scale for v in kind.size)
+    return replace(
+        kind, name=name, params={**kind.params, "xml": xml}, variant_of=kind.name, size=size, bottom=kind.bottom * scale,
+        rim=kind.rim * scale,
+    )  # fmt: skip
 
 
 KINDS |= {
@@ -125,8 +130,40 @@ KINDS |= {
     for k in (
         _recoloured(KINDS["akita_black_bowl"], "red_akita_black_bowl"),  # flat red
         _recoloured(KINDS["akita_black_bowl"], "yellow_bowl"),  # a yellow texture on the akita bowl's mesh
+        _recoloured(KINDS["akita_black_bowl"], "black_bowl"),  # a lighter texture (LIBERO-PRO's libero_spatial_object)
         _recoloured(KINDS["ketchup"], "green_ketchup"),
+        _recoloured(KINDS["ketchup"], "blue_ketchup"),  # flat blue
         _recoloured(KINDS["butter"], "green_butter"),
+        # LIBERO-PRO's libero_object_object: one grocery of each task recoloured or bigger, the basket red
+        _recoloured(KINDS["alphabet_soup"], "bigger_alphabet_soup", 1.5),
+        _recoloured(KINDS["bbq_sauce"], "green_bbq_sauce"),
+        _recoloured(KINDS["chocolate_pudding"], "green_chocolate_pudding"),
+        _recoloured(KINDS["cream_cheese"], "red_cream_cheese"),
+        _recoloured(KINDS["salad_dressing"], "red_salad_dressing"),
+        _recoloured(KINDS["milk"], "yellow_milk"),
+        _recoloured(KINDS["tomato_sauce"], "yellow_tomato_sauce"),
+        _recoloured(KINDS["basket"], "red_basket"),
+        _recoloured(KINDS["plate"], "yellow_plate"),
+        # LIBERO-PRO's libero_goal_object
+        _recoloured(KINDS["akita_black_bowl"], "bigger_akita_black_bowl", 1.5),
+        _recoloured(KINDS["wine_bottle"], "white_bottle"),  # its glass light green, its cork white
+        # LIBERO-PRO's added distractors (its `_with_mug`, `_with_yellow_book` suites), standing as LIBERO stands them
+        Kind(
+            "libero_mug_yellow",
+            "libero",
+            (0.09, 0.09, 0.071),
+            0.0,
+            params={"xml": "custom_objects/libero_mug_yellow/libero_mug_yellow.xml"},
+            called="yellow mug",
+        ),
+        Kind(
+            "yellow_book",
+            "libero",
+            (0.0235, 0.0977, 0.1222),
+            -0.002,
+            "x",
+            params={"xml": "turbosquid_objects/yellow_book/yellow_book.xml"},
+        ),
     )
 }
 
@@ -178,18 +215,79 @@ def benchmark_root() -> Path:
 
 
 @cache
-def tasks(suite: str) -> tuple[str, ...]:
-    """A suite's task names in LIBERO's benchmark order (benchmark/libero_suite_task_map.py)."""
+def _task_map() -> dict[str, list[str]]:
     source = (benchmark_root() / "benchmark" / "libero_suite_task_map.py").read_text()
     for node in ast.parse(source).body:
         if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "libero_task_map":
-            return tuple(ast.literal_eval(node.value)[suite])
+            return ast.literal_eval(node.value)
     raise WorldUnavailable(f"{benchmark_root()}: no task list in libero_suite_task_map.py")
 
 
+@cache
+def tasks(suite: str) -> tuple[str, ...]:
+    """A suite's task names in LIBERO's benchmark order (benchmark/libero_suite_task_map.py); a
+    LIBERO-PRO suite the map does not list (its layout shifts, `libero_object_temp_x0.1`...) in its
+    base suite's order."""
+    listed = _task_map().get(suite)
+    if listed is not None:
+        return tuple(listed)
+    files = sorted(p.stem for p in (benchmark_root() / "bddl_files" / suite).glob("*.bddl"))
+    base = _task_map().get(base_suite(suite), [])
+    return tuple(sorted(files, key=lambda t: base.index(t) if t in base else len(base)))
+
+
+# LIBERO-PRO's backdoor experiments beside its perturbations (a sticker as the goal, the instruction
+# unchanged; episodes copied): not exams of a suite's tasks
+NOT_PERTURBATIONS = ("trigger", "episode")
+
+
+def suites(world_suite: str) -> tuple[str, ...]:
+    """LIBERO-PRO's perturbed suites of a base suite whose tasks have both their BDDL problems and
+    initial states installed (`libero_object_swap`, ...), the base suite itself first."""
+    root = benchmark_root()
+    found = [
+        p.name
+        for p in sorted((root / "bddl_files").iterdir())
+        if p.name.startswith(f"{world_suite}_")
+        and (root / "init_files" / p.name).is_dir()
+        and not any(word in p.name for word in NOT_PERTURBATIONS)
+    ]
+    return (world_suite, *found)
+
+
+def base_suite(suite: str) -> str:
+    """The LIBERO suite a LIBERO-PRO suite perturbs: `libero_object` for `libero_object_swap`."""
+    for base in ("libero_object", "libero_spatial", "libero_goal"):
+        if suite == base or suite.startswith(f"{base}_"):
+            return base
+    return suite
+
+
 def language(task: str) -> str:
-    """The instruction LIBERO gives a task: its file name's words (benchmark's grab_language_from_filename)."""
+    """The instruction LIBERO's benchmark gives a task: its file name's words, a scene prefix
+    (`FLOOR_SCENE10_`) dropped (benchmark's grab_language_from_filename)."""
+    if task[:1].isupper():
+        return " ".join(task[task.find("SCENE") + (8 if "SCENE10" in task else 7) :].split("_"))
     return " ".join(task.split("_"))
+
+
+def base_task(suite: str, task: str) -> str:
+    """The task of the base suite a LIBERO-PRO task perturbs: the one of the same file name, else
+    (its added-object suites rename their files: `FLOOR_SCENE10_pick_the_...`) the one with the same
+    goal whose moved object starts in the same place."""
+    base = tasks(base_suite(suite))
+    if task in base:
+        return task
+    ours = problem(suite, task)
+
+    def start(p: Problem) -> tuple:
+        return tuple(pred for pred in p.init if len(pred) == 3 and pred[1] == p.goal[0][1])
+
+    found = [b for b in base if problem(base_suite(suite), b).goal == ours.goal]
+    found = [b for b in found if start(problem(base_suite(suite), b)) == start(ours)] if len(found) > 1 else found
+    if len(found) != 1:
+        raise KeyError(f"{suite}/{task}: no task of {base_suite(suite)} it perturbs")
+    return found[0]
 
 
 def initial_states(suite: str, task: str) -> np.ndarray:
@@ -239,6 +337,7 @@ class Problem:
     fixtures: dict[str, str]
     init: tuple[tuple[str, ...], ...]
     goal: tuple[tuple[str, ...], ...]
+    language: str = ""  # its `(:language ...)` line (LIBERO-PRO writes a perturbed instruction only there)
 
     def region_of(self, instance: str) -> str:
         """The region an object is placed in (`(On x floor_<region>)` in :init)."""
@@ -289,6 +388,7 @@ def parse_bddl(text: str, name: str = "") -> Problem:
         fixtures=typed(sections.get(":fixtures", [])),
         init=tuple(tuple(p) for p in sections.get(":init", [])),
         goal=tuple(tuple(p) for p in goal),
+        language=" ".join(w for w in sections.get(":language", []) if isinstance(w, str)),
     )
 
 

@@ -1,0 +1,34 @@
+"""A LIBERO task's objects as a type's candidates, for the types that lay out LIBERO's own scenes
+(their `canonical` hook: gen.canonical), LIBERO-PRO's perturbed ones included.
+
+An object of a kind the spec lists is that candidate; a recoloured or resized copy (LIBERO-PRO's
+`_object` suites: `green_butter`, `yellow_plate`) is the candidate it copies, under its own kind
+(LIBERO-PRO's instructions keep their words: the butter is still "the butter"); any other object (an
+added distractor: LIBERO-PRO's mug, book, milk) is scenery, named as the world calls it, which
+stands in the scene but is never named by a swap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from core import worlds
+from referents.schema import Candidate, ReferentConfig
+
+SCENERY = "scenery"  # the role of an object no candidate of the type is
+
+
+def base_kind(cfg: ReferentConfig, kind: str) -> str:
+    """The kind `kind` copies (itself if it copies none)."""
+    return worlds.world(cfg.world).kind(kind).variant_of or kind
+
+
+def candidate(cfg: ReferentConfig, kind: str) -> Candidate:
+    """The candidate an object of `kind` in a LIBERO problem is (see the module docstring)."""
+    for c in cfg.objects:
+        if c.kind == kind:
+            return c
+    for c in cfg.objects:
+        if c.kind == base_kind(cfg, kind):
+            return replace(c, kind=kind)
+    return Candidate(kind, worlds.world(cfg.world).kind(kind).noun, role=SCENERY)
