@@ -343,7 +343,10 @@ def exam_label(exam: Exam) -> str:
     canonical = exam.meta.get("canonical")
     if not canonical:
         return exam.name
-    suite = "LIBERO-" + canonical["suite"].removeprefix("libero_").title()
+    base = canonical.get("base_suite", canonical["suite"])
+    suite = "LIBERO-" + base.removeprefix("libero_").title()
+    if canonical["suite"] != base:  # a LIBERO-PRO perturbation of it
+        suite += f" ({canonical['suite']}, LIBERO-PRO)"
     per_task = len(next(iter(canonical["states"].values())))
     return (
         f"{suite} canonical exam: LIBERO's own initial states, {per_task} per task, seed {exam.meta.get('seed', '?')} "

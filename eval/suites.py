@@ -40,6 +40,7 @@ class SuitesOptions:
     suites: list[str] = field(default_factory=lambda: ["all"])  # suite names, or [all]: every covered suite of `world`
     world: str = "libero_object"  # the LIBERO world whose suites `all` means
     states: int = 5  # LIBERO's initial states per task in each exam (drawn with seed)
+    tasks: int | None = None  # only each suite's first this many covered tasks (a quick look); default all
     seed: int = 0
     image_size: int = 256  # the exams' frames (the policy's side)
     exams: str = "datasets/suites"  # where each suite's canonical exam is made, or found
@@ -75,8 +76,11 @@ def chosen(options: SuitesOptions) -> list[str]:
 
 def _exam(options: SuitesOptions, suite: str) -> Path:
     """The suite's canonical exam in `exams`: made unless one of the same options is there."""
-    folder = Path(options.exams) / f"{suite}-s{options.states}-seed{options.seed}-{options.image_size}px"
-    made = CanonicalOptions(states=options.states, seed=options.seed, image_size=options.image_size, out=str(folder), suite=suite)
+    some = f"-t{options.tasks}" if options.tasks else ""
+    folder = Path(options.exams) / f"{suite}-s{options.states}-seed{options.seed}-{options.image_size}px{some}"
+    made = CanonicalOptions(
+        states=options.states, seed=options.seed, image_size=options.image_size, out=str(folder), suite=suite, tasks=options.tasks
+    )
     if not (folder / "exam.json").is_file():
         build(made)
     return folder

@@ -61,6 +61,7 @@ class CanonicalOptions:
     out: Optional[str] = None  # default datasets/<suite>-canonical
     overwrite: bool = False
     suite: Optional[str] = None  # a LIBERO-PRO suite of the world's (its world is inferred): libero_object_swap, ...
+    tasks: Optional[int] = None  # only the first this many covered tasks (a quick look); default all
 
 
 @dataclass(frozen=True)
@@ -186,6 +187,10 @@ def suite_of(options: CanonicalOptions) -> Suite:
 
 def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
     suite = suite_of(options)
+    if options.tasks is not None:
+        if options.tasks < 1:
+            raise UserError(f"tasks must be at least 1, got {options.tasks}")
+        suite = replace(suite, tasks=suite.tasks[: options.tasks])
     check_seed(options.seed)
     fewest = min(len(libero.initial_states(suite.name, t)) for t in suite.tasks)
     if not 1 <= options.states <= fewest:
@@ -313,7 +318,8 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSetti
         "referent": referent.name,
         "seed": options.seed,
         "split": "exam",
-        "command": f"python -m gen.canonical {named} states={options.states} seed={options.seed} image_size={options.image_size}",
+        "command": f"python -m gen.canonical {named} states={options.states} seed={options.seed} image_size={options.image_size}"
+        + (f" tasks={options.tasks}" if options.tasks else ""),
         "profile": profile,
         "world": world.name,
         "canonical": {

@@ -34,7 +34,7 @@ PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": 
 
 @dataclass
 class GenConfig:
-    referent: Any = "object"  # a referent type (referents/<type>.yaml), or a list of types that share one dataset
+    referent: Any = "object"  # a referent type (referents/<type>.yaml), or a list that shares one dataset ([type@world,...])
     n: int = 20  # episodes
     seed: int = 0  # non-negative; the same seed and options give byte-identical output
     out: Optional[str] = None  # output folder; default datasets/<referent> (split=exam: datasets/<referent>-exam)
@@ -57,7 +57,7 @@ class GenConfig:
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
-    world: Optional[str] = None  # native | libero_object | libero_spatial | libero_goal; default: the referent's
+    world: Optional[str] = None  # native, libero_object, libero_spatial, libero_goal: one carrying the type; default its own
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
