@@ -29,8 +29,8 @@ def pytest_configure(config: pytest.Config) -> None:
 # The longest test files first: `make test` runs files side by side on two cores (xdist --dist
 # loadfile hands them out in collection order), and a long file started last would run alone.
 LONGEST_FIRST = (
-    "test_libero_axes", "test_libero_world", "test_libero_spatial", "test_libero_goal", "test_battery", "test_libero",
-    "test_own_code", "test_mixed", "test_train", "test_resume", "test_lerobot_policy",
+    "test_libero_axes", "test_libero_world", "test_libero_spatial", "test_libero_goal", "test_libero_pro", "test_battery",
+    "test_libero", "test_own_code", "test_mixed", "test_train", "test_resume", "test_lerobot_policy",
 )  # fmt: skip
 
 

@@ -140,6 +140,7 @@ ENTRY_POINTS = [
     ("gen.export", True),
     ("gen.canonical", False),
     ("eval", False),
+    ("eval.suites", False),
     ("eval.score", False),
     ("eval.serve", False),
     ("train", False),
@@ -148,6 +149,8 @@ ENTRY_POINTS = [
     ("bench/generate.py", False),
     ("bench/compare.py", False),
     ("bench/eval.py", False),
+    ("bench/first_try.py", False),
+    ("scripts/first_frames.py", True),
 ]
 
 

@@ -38,7 +38,7 @@ AXES = {"category": "libero_object", "negation": "libero_object", "composition":
 AXES |= {"color": "libero_spatial"}
 # Episodes of each type in the mixed dataset the replays use (the README's figures: 20, with
 # LIBERO_AXES_EPISODES=20), and the first PICTURE_STATES of them the pictures compare (README: 5)
-PER_TYPE = int(os.environ.get("LIBERO_AXES_EPISODES", "3"))
+PER_TYPE = int(os.environ.get("LIBERO_AXES_EPISODES", "2"))
 # Things our fast rendering cannot bring within helpers.OBJECT_BOUND (README "Each object and fixture
 # as LIBERO draws it"): LIBERO-Object's woven basket, LIBERO-Spatial's mirror stove top and the bowls
 # close to the wrist camera.

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # lerobot's own loader, before any GL context
+from PIL import Image
 
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from gen import scenes
@@ -19,6 +20,8 @@ from gen.cli import main
 from gen.config import GenConfig, parse
 from gen.plan import plan_and_audit
 from helpers import make_dataset
+
+ROOT = Path(__file__).resolve().parent.parent
 
 # The reference study's seven types, each in the LIBERO scene that carries it: (as the list names
 # it, the type its episodes record, their world, the type's name in the mix)
@@ -138,6 +141,15 @@ def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path:
     assert (act / "model.safetensors").is_file()
     lora = _lerobot_train(tmp_path / "lora", mixed, path=act)
     assert (lora / "adapter_config.json").is_file() and json.loads((lora / "config.json").read_text())["use_peft"]
+
+
+def test_a_picture_of_each_types_first_frame(mixed: Path, tmp_path: Path) -> None:
+    """scripts/first_frames.py: one tile per type, each under its instruction."""
+    out = tmp_path / "first.png"
+    script = ROOT / "scripts" / "first_frames.py"
+    done = subprocess.run([sys.executable, str(script), str(mixed), f"out={out}"], capture_output=True, text=True)
+    assert done.returncode == 0 and f"({len(STUDY)} types" in done.stdout, done.stderr[-2000:]
+    assert Image.open(out).width == len(STUDY) * 192
 
 
 def test_a_killed_mix_resumes_to_the_same_bytes(mixed: Path, tmp_path: Path) -> None:
