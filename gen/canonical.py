@@ -51,6 +51,8 @@ from referents import Referent
 if TYPE_CHECKING:
     from oracle.scene import Scene
 
+ON_SCENE_MARGIN = 0.2  # m beyond a world's reach where LIBERO's regions may still stand
+
 
 @dataclass
 class CanonicalOptions:
@@ -130,6 +132,9 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
     other = sorted(set(problem.fixtures.values()) - furniture - {"table", "floor"})
     if other:
         return f"its furniture ({', '.join(other)}) is not world {world.name}'s"
+    moved = _moved_fixtures(problem, libero.problem(world.suite, libero.base_task(suite, task)))
+    if moved:
+        return f"LIBERO-PRO moves its {', '.join(moved)}, which our scenes stand where LIBERO's own suite does"
     assert referent.code.canonical is not None
     design = referent.code.canonical(referent.config, problem)
     if design is None:
@@ -140,15 +145,27 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
         return f"its {carried_kind.name} is wider than the Panda's fingers open"
     if not len(libero.initial_states(suite, task)):
         return "its initial-state file is empty"
-    x0, x1, y0, y1 = world.reach
     for name in problem.goal[0][1:]:
         instance = name.removesuffix("_contain_region")
         regions = [pred[2] for pred in problem.init if len(pred) == 3 and pred[1] == instance]
         if instance in problem.objects and regions and any(r.split("_", 1)[-1] in problem.regions for r in regions):
-            x, y = problem.centre(problem.region_of(instance))
-            if not (x0 - 0.2 <= x <= x1 + 0.2 and y0 - 0.2 <= y <= y1 + 0.2):
+            if not _on_scene(world, *problem.centre(problem.region_of(instance))):
                 return f"LIBERO-PRO parks {instance}, which the goal names, off the scene"
     return None
+
+
+def _moved_fixtures(problem: libero.Problem, base: libero.Problem) -> list[str]:
+    """The fixtures a perturbed problem stands in another region than its base task does."""
+    where = {pred[1]: pred[2] for pred in base.init if len(pred) == 3 and pred[1] in base.fixtures}
+    placed = [pred for pred in problem.init if len(pred) == 3 and pred[1] in problem.fixtures]
+    return sorted(name for _, name, region in placed if where.get(name, region) != region)
+
+
+def _on_scene(world: worlds.World, x: float, y: float) -> bool:
+    """Whether a place is on the world's scene (LIBERO-PRO parks the objects a suite takes away
+    metres off it, e.g. at x = 10 m): its reach, with a margin for LIBERO's regions at its edges."""
+    x0, x1, y0, y1 = world.reach
+    return x0 - ON_SCENE_MARGIN <= x <= x1 + ON_SCENE_MARGIN and y0 - ON_SCENE_MARGIN <= y <= y1 + ON_SCENE_MARGIN
 
 
 def suite_of(options: CanonicalOptions) -> Suite:
@@ -298,7 +315,9 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
         pose = qpos[f"{instance}_joint0"]
         at = tuple(round(float(v), 5) for v in pose[:3])
         objects.append(replace(obj, pos=at, yaw=round(yaw_of(pose[3:], world.kind(obj.kind).quat), 5)))
-    return replace(spec, objects=(*objects, *spec.objects[len(objects) :]))  # places on furniture stay
+    parked = {o.id for o in objects if not _on_scene(world, o.pos[0], o.pos[1])}
+    swaps = tuple(c for c in spec.counterfactuals if c.target not in parked)  # no swap names what is not there
+    return replace(spec, objects=(*objects, *spec.objects[len(objects) :]), counterfactuals=swaps)  # places on furniture stay
 
 
 def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSettings, chosen: dict, report: dict) -> dict:

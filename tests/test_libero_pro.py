@@ -109,6 +109,28 @@ def test_every_covered_suites_initial_states_load_and_its_tasks_are_recorded(tmp
             assert record["language_line"] == libero.problem(name, task).language
 
 
+def test_a_task_whose_fixtures_the_suite_moves_is_left_out_saying_so() -> None:
+    """libero_goal_swap stands the stove where the cream cheese stood (and the cheese on the stove's
+    place): our scenes keep LIBERO's fixtures where its own suite stands them, so the task is left out."""
+    left = suite_of(CanonicalOptions(suite="libero_goal_swap")).left_out
+    assert "LIBERO-PRO moves its flat_stove_1" in left["put_the_cream_cheese_in_the_bowl"]
+    unmoved = suite_of(CanonicalOptions(suite="libero_goal_with_mug")).left_out.values()  # its fixtures stand as LIBERO's
+    assert unmoved and not [why for why in unmoved if "moves" in why]
+
+
+def test_no_swap_names_an_object_the_suite_parked_off_the_scene(tmp_path: Path) -> None:
+    """LIBERO-PRO's shifted layouts park a grocery metres away (x = 10 m in libero_object_temp_x0.3):
+    no policy could fetch it, so no swap row names it."""
+    build(CanonicalOptions(suite="libero_object_temp_x0.3", states=1, image_size=32, out=str(tmp_path / "e"), tasks=3))
+    trials = read(tmp_path / "e").trials
+    parked = 0
+    for _, row in trials[trials["face"] == "swap"].iterrows():
+        where = {o["id"]: o["pos"] for o in json.loads(row["spec"])["objects"]}
+        parked += sum(abs(x) > 1 for x, *_ in where.values())
+        assert abs(where[row["target"]][0]) < 1, f"a swap names {row['target']}, parked at {where[row['target']]}"
+    assert parked, "the suite no longer parks a grocery: pick a suite that does"
+
+
 @pytest.mark.parametrize("name", _covered() if EVERY else SAMPLED)
 def test_the_same_pictures_and_poses_as_liberos_own_render_of_the_suite(name: str, tmp_path: Path) -> None:
     """The first state of the suite's first tasks (its added, moved and recoloured objects
