@@ -13,8 +13,9 @@ import mujoco
 import numpy as np
 
 from core.layout import LIBERO, NATIVE
+from core.spec import EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World, libero
-from gen.canonical import CanonicalOptions, load_state, suite_of
+from gen.canonical import CanonicalOptions, Suite, load_state, suite_of
 from gen.config import parse
 from gen.plan import world_sim
 from gen.run import generate
@@ -80,6 +81,16 @@ class Pictures:
         assert excess <= 0, f"{name} in {camera} at {where}: {figure:.1f}/255 inside its pixels, {excess:.1f} over its bound"
 
 
+def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, sim: SimSettings) -> list[str]:
+    """Our scene in a LIBERO task's initial state with no design of it: each object under its LIBERO
+    instance name, every joint set by name from LIBERO's state vector; returns the objects' ids."""
+    problem = suite.problem(task)
+    objects = tuple(SceneObject(instance, kind, kind, 0, (0.0, 0.0, 1.0)) for instance, kind in problem.objects.items())
+    scene.reset(EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), suite.inventory(), sim=sim))
+    scene.set_joints(*libero.split_state(libero.initial_states(suite.name, task)[state], problem))
+    return [o.id for o in objects]
+
+
 def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: Path) -> tuple[Pictures, float]:
     """Our frames against LIBERO's own render at LIBERO's initial states of a suite (LIBERO's or
     LIBERO-PRO's): `cases` are (task number in the suite's order, state); the fixtures posed as
@@ -100,9 +111,12 @@ def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: P
             for name, *pose in theirs[f"{t}-{s}-fixtures"].tolist():  # LIBERO draws its fixtures anew at each reset
                 body = m.body(f"{name}_main").id
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
-            spec = load_state(scene, chosen, names[t], s, sim)
+            if names[t] in chosen.tasks:
+                ids = [o.id for o in load_state(scene, chosen, names[t], s, sim).objects]
+            else:  # a task our skills cannot do (LIBERO-Goal's drawers): its objects under LIBERO's names
+                ids = _load_by_name(scene, chosen, names[t], s, sim)
             pictures.compare(cameras, theirs, f"{t}-{s}", f"{suite} task {t} state {s}")
-            ours = {instance: scene.object_pos(o.id) for o, instance in zip(spec.objects, chosen.problem(names[t]).objects)}
+            ours = {instance: scene.object_pos(i) for i, instance in zip(ids, chosen.problem(names[t]).objects)}
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
     finally:

@@ -83,9 +83,15 @@ def test_ctrl_c_keeps_the_finished_rollouts_and_resume_gives_the_uninterrupted_r
     kept = tmp_path / ".oracle.partial" / "rollouts"
     taking = _eval_process(f"exam={exam}", f"out={out}", "workers=1")
     deadline = time.monotonic() + 120
-    while len(list(kept.glob("*.pkl"))) < 3 and taking.poll() is None and time.monotonic() < deadline:
+    # The take runs in 20 ms slices, stopped between them: a busy machine cannot let it finish unseen
+    while taking.poll() is None and time.monotonic() < deadline:
+        taking.send_signal(signal.SIGSTOP)
+        if len(list(kept.glob("*.pkl"))) >= 3:
+            break
+        taking.send_signal(signal.SIGCONT)
         time.sleep(0.02)
     taking.send_signal(signal.SIGINT)
+    taking.send_signal(signal.SIGCONT)
     _, err = taking.communicate()
     last = err.strip().splitlines()[-1]
     assert taking.returncode == 130 and last.startswith("error: interrupted: ") and "of 18 rollouts kept in" in last, err

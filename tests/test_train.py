@@ -122,7 +122,7 @@ def _train(*args: str) -> subprocess.CompletedProcess[str]:
 def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_dataset: Path) -> None:
     cases = [
         (_synthetic(tmp_path / "same", ["pick up the lemon"] * 3), "no instruction diversity"),
-        (_synthetic(tmp_path / "onecam", ["a", "b"], cameras=("agentview",)), "missing feature 'observation.images.wrist'"),
+        (_synthetic(tmp_path / "onecam", ["a", "b"], cameras=("agentview",)), "native misses 'observation.images.wrist'"),
         (tmp_path / "nothing", "is not a LeRobot dataset"),
     ]
     for dataset, needle in cases:

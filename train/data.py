@@ -65,8 +65,9 @@ def profile_of(features: dict, root: Path) -> FeatureLayout:
     for candidate in LAYOUTS.values():
         if set(candidate.image_keys) <= set(features) and STATE_KEY in features and ACTION_KEY in features:
             return candidate
-    expected = "; ".join(f"{p.name}: {', '.join([*p.image_keys, STATE_KEY, ACTION_KEY])}" for p in LAYOUTS.values())
-    raise DatasetError(f"{root}: its features fit no profile the tiny policy reads ({expected})")
+    missing = {p.name: [k for k in (*p.image_keys, STATE_KEY, ACTION_KEY) if k not in features] for p in LAYOUTS.values()}
+    said = "; ".join(f"{name} misses {', '.join(repr(k) for k in keys)}" for name, keys in missing.items())
+    raise DatasetError(f"{root}: its features fit no profile the tiny policy reads ({said})")
 
 
 def check(root: Path, image_size: int | None = None) -> dict:
