@@ -61,7 +61,7 @@ test: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
 # The pure core, planning, the audit and the command lines: nothing simulated (< 3 min on 2 cores).
 test-fast: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q -m fast
+	$(BIN)/python -m pytest -q -m fast -n 2
 
 bench: $(STAMP)
 	$(BIN)/python bench/generate.py
