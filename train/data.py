@@ -62,10 +62,10 @@ class Frames:
 
 def profile_of(features: dict, root: Path) -> FeatureLayout:
     """The feature layout (core/layout.py) a dataset's features are: its cameras, state and action."""
-    for candidate in LAYOUTS.values():
-        if set(candidate.image_keys) <= set(features) and STATE_KEY in features and ACTION_KEY in features:
-            return candidate
     missing = {p.name: [k for k in (*p.image_keys, STATE_KEY, ACTION_KEY) if k not in features] for p in LAYOUTS.values()}
+    for candidate in LAYOUTS.values():
+        if not missing[candidate.name]:
+            return candidate
     said = "; ".join(f"{name} misses {', '.join(repr(k) for k in keys)}" for name, keys in missing.items())
     raise DatasetError(f"{root}: its features fit no profile the tiny policy reads ({said})")
 
