@@ -66,6 +66,14 @@ class TaskSpec:
     params: dict[str, Any] = field(default_factory=dict)
 
 
+# How the cameras draw a scene (oracle/scene.py, oracle/render.py). `fast`: meshes lightened and
+# no reflections, a mirror top stood in for by a plate (README: rendering). `full`: every mesh as
+# its file has it and MuJoCo's reflections, as the world's own simulator draws it (LIBERO's
+# scanned basket and bowls, its mirror stove top), for about 3x the frame's rendering time.
+FAST, FULL = "fast", "full"
+LOOKS = (FAST, FULL)
+
+
 @dataclass(frozen=True)
 class SimSettings:
     """Everything besides the objects that determines the simulation and its recording."""
@@ -76,9 +84,12 @@ class SimSettings:
     robot_home: tuple[float, ...] = PANDA_HOME
     profile: str = NATIVE.name  # the feature layout: cameras, state, action and controller (core/layout.py)
     world: str = "native"  # where the episode happens: arena, robot, cameras, object models (core/worlds/)
+    look: str = FAST  # how the cameras draw it (LOOKS)
 
     def __post_init__(self) -> None:
         layout(self.profile)  # an unknown profile fails here, naming the known ones
+        if self.look not in LOOKS:
+            raise ValueError(f"unknown look {self.look!r}; known: {', '.join(LOOKS)}")
 
     @property
     def layout(self) -> FeatureLayout:
@@ -134,6 +145,8 @@ class EpisodeSpec:
             del d["sim"]["profile"]
         if self.sim.world == "native":  # and so do those of the native world
             del d["sim"]["world"]
+        if self.sim.look == FAST:  # and those drawn with the fast look, which is all there was before `look`
+            del d["sim"]["look"]
         return d
 
     def to_json(self) -> str:
@@ -221,6 +234,7 @@ class EpisodeSpec:
                     robot_home=tuple(float(v) for v in d["sim"]["robot_home"]),
                     profile=str(d["sim"].get("profile", NATIVE.name)),
                     world=str(d["sim"].get("world", "native")),
+                    look=str(d["sim"].get("look", FAST)),
                 ),
                 attempt=int(d["attempt"]),
                 split=str(d.get("split", "train")),

@@ -32,7 +32,7 @@ from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
 from eval.rollout import check_action, observe
 from oracle.render import Cameras
-from oracle.scene import scene_for
+from oracle.scene import spec_scene
 
 
 class ExamEnv(gym.Env):
@@ -70,7 +70,7 @@ class ExamEnv(gym.Env):
             }
         )
         self.action_space = spaces.Box(np.array(features.action_low, np.float32), np.array(features.action_high, np.float32))
-        self.scene = scene_for(self.episode.assets, self.episode.sim.profile, self.episode.sim.world)
+        self.scene = spec_scene(self.episode)
         self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
         self._t = 0
         self._start: dict = {}

@@ -22,7 +22,7 @@ from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
 from eval.registry import make
 from oracle.render import Cameras
-from oracle.scene import Scene, scene_for
+from oracle.scene import Scene, spec_scene
 
 if TYPE_CHECKING:
     from gen.partial import Partial
@@ -99,7 +99,7 @@ class Runner:
     def cameras(self, scene: Scene, spec: EpisodeSpec) -> Cameras | None:
         if not self.policy.needs_images:
             return None
-        key = (spec.assets, spec.sim.image_size, spec.sim.cameras)
+        key = (scene, spec.sim.image_size, spec.sim.cameras)  # a scene per inventory, profile, world and look
         if key not in self._cameras:
             self._cameras[key] = Cameras(scene, spec.sim.image_size, spec.sim.cameras)
         return self._cameras[key]
@@ -115,7 +115,7 @@ class Runner:
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
         features = spec.sim.layout
-        scene = scene_for(spec.assets, spec.sim.profile, spec.sim.world)
+        scene = spec_scene(spec)
         scene.reset(spec)
         scene.set_physics_state(start)
         cameras = self.cameras(scene, spec)

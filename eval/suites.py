@@ -24,6 +24,7 @@ from pathlib import Path
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core import worlds
 from core.exam import read
+from core.spec import FAST
 from core.worlds import libero
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
@@ -43,6 +44,7 @@ class SuitesOptions:
     tasks: int | None = None  # only each suite's first this many covered tasks (a quick look); default all
     seed: int = 0
     image_size: int = 256  # the exams' frames (the policy's side)
+    look: str = FAST  # fast | full: how the exams' cameras draw (core/spec.py LOOKS)
     exams: str = "datasets/suites"  # where each suite's canonical exam is made, or found
     out: str | None = None  # the report; default runs/suites/<policy>
     workers: int = 1  # processes running rollouts
@@ -77,9 +79,16 @@ def chosen(options: SuitesOptions) -> list[str]:
 def _exam(options: SuitesOptions, suite: str) -> Path:
     """The suite's canonical exam in `exams`: made unless one of the same options is there."""
     some = f"-t{options.tasks}" if options.tasks else ""
+    some += f"-{options.look}" if options.look != FAST else ""
     folder = Path(options.exams) / f"{suite}-s{options.states}-seed{options.seed}-{options.image_size}px{some}"
     made = CanonicalOptions(
-        states=options.states, seed=options.seed, image_size=options.image_size, out=str(folder), suite=suite, tasks=options.tasks
+        states=options.states,
+        seed=options.seed,
+        image_size=options.image_size,
+        out=str(folder),
+        suite=suite,
+        tasks=options.tasks,
+        look=options.look,
     )
     if not (folder / "exam.json").is_file():
         build(made)

@@ -40,7 +40,7 @@ import numpy as np
 import referents
 from core import exam, worlds
 from core.layout import STATE_KEY, TASK_KEY, layout
-from core.spec import EpisodeSpec, SceneObject, SimSettings, yaw_of
+from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, yaw_of
 from core.worlds import libero
 from gen.audit import audit
 from gen.cli import UserError, main
@@ -64,6 +64,7 @@ class CanonicalOptions:
     overwrite: bool = False
     suite: Optional[str] = None  # a LIBERO-PRO suite of the world's (its world is inferred): libero_object_swap, ...
     tasks: Optional[int] = None  # only the first this many covered tasks (a quick look); default all
+    look: str = FAST  # fast | full: how the exam's cameras draw (core/spec.py LOOKS)
 
 
 @dataclass(frozen=True)
@@ -214,6 +215,8 @@ def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
         raise UserError(f"states must be between 1 and {fewest} ({suite.name}'s initial states per task), got {options.states}")
     if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
         raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
+    if options.look not in LOOKS:
+        raise UserError(f"look must be one of {', '.join(LOOKS)}, got {options.look!r}")
     out = Path(options.out or f"datasets/{suite.name}-canonical")
     check_output(out, options.overwrite)
     return suite, out
@@ -266,13 +269,13 @@ def build(options: CanonicalOptions) -> None:
     started = time.perf_counter()
     world = suite.world
     profile = layout(world.profiles[0])
-    sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name)
+    sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
     rng = np.random.default_rng(options.seed)
     chosen = {
         task: sorted(rng.choice(len(libero.initial_states(suite.name, task)), options.states, replace=False).tolist())
         for task in suite.tasks
     }
-    scene = scene_for(suite.inventory(), profile.name, world.name)
+    scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
     rows, specs = [], []
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
     for task in suite.tasks:

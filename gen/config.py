@@ -18,6 +18,7 @@ import referents
 from core import worlds
 from core.exam import ANSWERS_FILE, EXAM_FORMAT, TRIALS_FILE
 from core.layout import FeatureLayout, layout
+from core.spec import FAST, LOOKS
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen import mix
 from gen.cli import UserError, compose_config
@@ -58,6 +59,7 @@ class GenConfig:
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
     world: Optional[str] = None  # native, libero_object, libero_spatial, libero_goal: one carrying the type; default its own
+    look: str = FAST  # fast | full: every mesh whole and reflections, as the world's own simulator draws (core/spec.py)
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -113,6 +115,8 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"fps must divide the physics rate of {physics_hz} Hz (e.g. 10, 20, 25, 50), got {cfg.fps}")
     if cfg.codec not in CODECS:
         raise UserError(f"codec must be one of {', '.join(CODECS)}, got {cfg.codec!r}")
+    if cfg.look not in LOOKS:
+        raise UserError(f"look must be one of {', '.join(LOOKS)}, got {cfg.look!r}")
     if cfg.push_to_hub and not cfg.repo_id:
         raise UserError("push_to_hub=true needs repo_id=<user or org>/<name>")
     if cfg.split not in ("train", "exam"):

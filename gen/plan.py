@@ -17,7 +17,7 @@ import numpy as np
 
 from core import worlds
 from core.layout import layout
-from core.spec import EpisodeSpec, SceneObject, SimSettings
+from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from gen import mix
 from gen.audit import audit
 from gen.cli import UserError
@@ -117,7 +117,9 @@ class Planned:
         return self.shares[0].sim
 
 
-def world_sim(world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20) -> SimSettings:
+def world_sim(
+    world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20, look: str = FAST
+) -> SimSettings:
     """A world's sim settings: its robot's home, a profile it is recorded in (default its own)."""
     features = layout(profile or world.profiles[0])
     return SimSettings(
@@ -127,11 +129,12 @@ def world_sim(world: worlds.World, profile: str | None = None, image_size: int |
         robot_home=world.robot_home,
         profile=features.name,
         world=world.name,
+        look=look,
     )
 
 
 def sim_settings(cfg: GenConfig, world: worlds.World) -> SimSettings:
-    return world_sim(world, cfg.profile, cfg.image_size, cfg.fps)
+    return world_sim(world, cfg.profile, cfg.image_size, cfg.fps, cfg.look)
 
 
 def default_sim(referent: Referent) -> SimSettings:

@@ -30,11 +30,11 @@ CAPTION = 54
 def rendered_frames(specs: list[EpisodeSpec], camera: str) -> dict[int, np.ndarray]:
     """First frames rendered from the specs (for plans, which have no video)."""
     from oracle.render import Cameras
-    from oracle.scene import scene_for
+    from oracle.scene import spec_scene
 
     out = {}
     for spec in specs:
-        scene = scene_for(spec.assets, spec.sim.profile, spec.sim.world)
+        scene = spec_scene(spec)
         scene.reset(spec)
         cams = Cameras(scene, spec.sim.image_size, (camera,))
         out[spec.index] = cams.render()[camera].copy()

@@ -19,6 +19,7 @@ from pathlib import Path
 import referents
 from core import __version__, worlds
 from core.layout import NATIVE
+from core.spec import FAST
 from gen.config import GenConfig
 from referents import Referent
 
@@ -37,6 +38,8 @@ def run_record(cfg: GenConfig) -> dict:
         record["profile"] = cfg.profile
     if cfg.world not in (None, "native"):
         record["world"] = cfg.world
+    if cfg.look != FAST:
+        record["look"] = cfg.look
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
@@ -79,7 +82,7 @@ class Provenance:
         if cfg.world is not None and not own:
             parts.append(("world", f"world={cfg.world}"))  # a type's own world goes unsaid
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
-        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile"):
+        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look"):
             value = getattr(cfg, name)
             if value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
                 parts.append((name, f"{name}={value}"))

@@ -1,7 +1,8 @@
 """The dataset's cameras, rendered on the CPU with the fast settings.
 
 MuJoCo's defaults (4x MSAA, shadows, reflections, collision geoms) cost about 4x more per frame
-on llvmpipe; none of them helps a policy (README: rendering). Cameras are the scene's profile's
+on llvmpipe; none of them helps a policy (README: rendering). A scene of the full look
+(core/spec.py) draws reflections, as its world's own simulator does. Cameras are the scene's profile's
 (core/layout.py), and a profile whose frames are stored mirrored gets them mirrored here.
 """
 
@@ -13,6 +14,7 @@ import mujoco
 import numpy as np
 
 from core.layout import AGENTVIEW, NATIVE
+from core.spec import FULL
 from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
 
 
@@ -31,6 +33,7 @@ class Cameras:
         flags = self.renderer.scene.flags
         for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):
             flags[flag] = False
+        flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = scene.look == FULL
         self.options = {c: self._option(scene.layout.cameras[c]) for c in cameras}
         self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
         self._names: np.ndarray | None = None  # labels(): each geom's object, read from the model at the first call

@@ -26,7 +26,7 @@ from scipy.optimize import nnls
 
 from core import catalog, worlds
 from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
-from core.spec import EpisodeSpec, SceneObject, yaw_quat
+from core.spec import FAST, EpisodeSpec, SceneObject, yaw_quat
 from core.worlds import native
 from oracle import meshes, textures
 from oracle.drives import SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
@@ -198,8 +198,12 @@ def _configure(root: ET.Element, world: worlds.World) -> None:
             node.set("fovy", str(cam.fovy))
 
 
-def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.controller, world_name: str = "native") -> str:
-    """The MJCF of a world's scene holding `count` bodies of each of its kinds, for a profile's controller."""
+def scene_xml(
+    assets: tuple[tuple[str, int], ...], controller: str = NATIVE.controller, world_name: str = "native", look: str = FAST
+) -> str:
+    """The MJCF of a world's scene holding `count` bodies of each of its kinds, for a profile's
+    controller, drawn with `look` (core/spec.py): the fast look's meshes lightened and mirror tops
+    stood in for by plates, the full look's as their files have them."""
     world = worlds.world(world_name)
     if world.builder == "table":
         arena = TableArena(table_full_size=native.TABLE_SIZE, table_offset=(0, 0, native.TABLE_TOP_Z))
@@ -213,11 +217,13 @@ def scene_xml(assets: tuple[tuple[str, int], ...], controller: str = NATIVE.cont
     if controller == NATIVE.controller:
         _servo_and_gravcomp(root)
     _configure(root, world)
-    faces = {str(libero_folder(k)): k.params["faces"] for k in world.kinds.values() if "faces" in k.params}
-    meshes.lighten(root, objects=world.builder != "table", faces=faces, robot_faces=world.robot_faces)
+    if look == FAST:
+        faces = {str(libero_folder(k)): k.params["faces"] for k in world.kinds.values() if "faces" in k.params}
+        meshes.lighten(root, objects=world.builder != "table", faces=faces, robot_faces=world.robot_faces)
     if world.builder != "table":  # robosuite's own textures are small; the native scene's bytes stay as they are
-        textures.shrink(root)
-        _mirror_plates(root, world)
+        textures.shrink(root)  # only texels no camera samples at our frame sizes: the same look
+        if look == FAST:
+            _mirror_plates(root, world)
     return ET.tostring(root, encoding="unicode")
 
 
@@ -251,11 +257,14 @@ class Body:
 class Scene:
     """A compiled scene that episodes re-pose by state, never by re-parsing."""
 
-    def __init__(self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native") -> None:
+    def __init__(
+        self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native", look: str = FAST
+    ) -> None:
         self.assets = tuple(sorted(assets))
         self.layout: FeatureLayout = layout(profile)
         self.world = worlds.world(world)
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world))
+        self.look = look  # how its cameras draw it (core/spec.py LOOKS; oracle/render.py)
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world, look))
         m = self.model
         self.data = mujoco.MjData(m)
         servo = self.layout.controller == NATIVE.controller
@@ -525,6 +534,11 @@ def _descends(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
 
 
 @lru_cache(maxsize=4)
-def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native") -> Scene:
-    """One compiled scene per inventory, profile, world and process."""
-    return Scene(assets, profile, world)
+def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native", look: str = FAST) -> Scene:
+    """One compiled scene per inventory, profile, world, look and process."""
+    return Scene(assets, profile, world, look)
+
+
+def spec_scene(spec: EpisodeSpec) -> Scene:
+    """The compiled scene an episode plays in, drawn as its settings say."""
+    return scene_for(spec.assets, spec.sim.profile, spec.sim.world, spec.sim.look)

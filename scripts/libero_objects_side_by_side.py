@@ -1,6 +1,7 @@
 """The objects our LIBERO worlds drew least like LIBERO, close up: LIBERO's own frame, ours at an
-earlier revision and ours now, side by side, each with its mean absolute difference from LIBERO's
-inside the object's own pixels (the README's picture, docs/libero_objects_side_by_side.png):
+earlier revision, ours now in the fast look and in the full look (`look=full`, core/spec.py), side
+by side, each with its mean absolute difference from LIBERO's inside the object's own pixels (the
+README's picture, docs/libero_objects_side_by_side.png):
 `python scripts/libero_objects_side_by_side.py [before=4a9eaf0] [out=docs/libero_objects_side_by_side.png]`.
 
 `before` is a git revision: its tree is exported to a temporary folder and this script renders our
@@ -52,9 +53,12 @@ def liberos_frames(world: str, cases: list[list[int]], out: Path) -> Path:
     return out
 
 
-def our_frames(world_name: str, cases: list[list[int]], theirs: np.lib.npyio.NpzFile, labels: bool = True) -> dict:
+def our_frames(
+    world_name: str, cases: list[list[int]], theirs: np.lib.npyio.NpzFile, labels: bool = True, look: str | None = None
+) -> dict:
     """Our frames of both cameras (`<task>-<state>-<camera>`) at LIBERO's states, the fixtures posed
-    as LIBERO drew them, and (`labels`) what each pixel shows (`-labels`)."""
+    as LIBERO drew them, and (`labels`) what each pixel shows (`-labels`); drawn with `look`, or as
+    a revision before looks drew them (None)."""
     import referents
     from core import worlds
     from core.layout import LIBERO
@@ -64,7 +68,7 @@ def our_frames(world_name: str, cases: list[list[int]], theirs: np.lib.npyio.Npz
     from oracle.scene import scene_for
 
     world, referent = worlds.world(world_name), referents.load(world_name)
-    scene = scene_for(referent.assets(), "libero", world.name)
+    scene = scene_for(referent.assets(), "libero", world.name, *([look] if look else []))
     cameras, out = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), {}
     for task, state in cases:
         for name, *pose in theirs[f"{task}-{state}-fixtures"].tolist():  # LIBERO draws these at each reset
@@ -112,6 +116,7 @@ def picture(options: ObjectsOptions) -> None:
     from PIL import Image, ImageDraw
 
     from core.layout import LIBERO
+    from core.spec import LOOKS
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp_name:
@@ -120,16 +125,17 @@ def picture(options: ObjectsOptions) -> None:
             cases = [[t, s] for w, t, s, *_ in SHOWN if w == world]
             theirs_file = liberos_frames(world, cases, tmp / f"{world}-theirs.npz")
             theirs = np.load(theirs_file, allow_pickle=True)
-            now, before = our_frames(world, cases, theirs), _before(options.before, world, cases, theirs_file, tmp)
+            now, full = (our_frames(world, cases, theirs, look=look) for look in LOOKS)
+            before = _before(options.before, world, cases, theirs_file, tmp)
             for w, t, s, camera, thing in SHOWN:
                 if w != world:
                     continue
                 key = f"{t}-{s}-{LIBERO.cameras[camera]}"
                 reference = theirs[key][::-1, ::-1]  # as a policy sees it (lerobot's LiberoProcessorStep)
                 their_labels = named(theirs[f"{key}-labels"][::-1, ::-1], theirs[f"{t}-{s}-things"])
-                ours = [before[f"{t}-{s}-{camera}"], now[f"{t}-{s}-{camera}"]]
-                labels = now[f"{t}-{s}-{camera}-labels"]  # the same geometry, at the same poses, before and now
-                figures = [object_differences(o, reference, labels, their_labels)[thing] for o in ours]
+                ours = [before[f"{t}-{s}-{camera}"], now[f"{t}-{s}-{camera}"], full[f"{t}-{s}-{camera}"]]
+                labels = [now[f"{t}-{s}-{camera}-labels"]] * 2 + [full[f"{t}-{s}-{camera}-labels"]]  # before: as now
+                figures = [object_differences(o, reference, lab, their_labels)[thing] for o, lab in zip(ours, labels)]
                 ys, xs = np.nonzero(their_labels == thing)
                 box = (slice(max(ys.min() - 6, 0), ys.max() + 7), slice(max(xs.min() - 6, 0), xs.max() + 7))
                 rows.append(
@@ -139,15 +145,14 @@ def picture(options: ObjectsOptions) -> None:
                         [reference[box], *(o[box] for o in ours)],
                     )
                 )
-    height, width = 192, 3 * 206
+    height, width = 192, 4 * 206
     sheet = Image.new("RGB", (width, len(rows) * (height + 44)), "white")
     draw = ImageDraw.Draw(sheet)
-    for i, (title, (before, now), crops) in enumerate(rows):
+    for i, (title, (before, now, full), crops) in enumerate(rows):
         y = i * (height + 44)
         draw.text((4, y + 4), title, fill="black")
-        for j, (crop, caption) in enumerate(
-            zip(crops, ("LIBERO's", f"ours before: {before:.1f}/255", f"ours now: {now:.1f}/255"))
-        ):
+        captions = ("LIBERO's", f"ours before: {before:.1f}/255", f"fast look: {now:.1f}/255", f"look=full: {full:.1f}/255")
+        for j, (crop, caption) in enumerate(zip(crops, captions)):
             scale = min(height / crop.shape[0], 192 / crop.shape[1])
             image = Image.fromarray(crop).resize((round(crop.shape[1] * scale), round(crop.shape[0] * scale)), Image.NEAREST)
             sheet.paste(image, (j * 206, y + 18))

@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from core.layout import LIBERO, NATIVE
-from core.spec import EpisodeSpec, SceneObject, SimSettings
+from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World, libero
 from gen.canonical import CanonicalOptions, Suite, load_state, suite_of
 from gen.config import parse
@@ -30,6 +30,9 @@ LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
 # LIBERO's initial states per task the picture tests compare (each a render in LIBERO's env and in
 # ours): 2 in `make test`; the README's figures, over the first 5, with LIBERO_PICTURE_STATES=5.
 PICTURE_STATES = int(os.environ.get("LIBERO_PICTURE_STATES", "2"))
+# LIBERO's initial states per task each world's canonical-exam test builds: the first 10 (drawn with
+# the exam's seed) in `make test`; all 50 (every state of the suite loads) with LIBERO_CANONICAL_STATES=50.
+CANONICAL_STATES = int(os.environ.get("LIBERO_CANONICAL_STATES", "10"))
 # Episodes each LIBERO world's replay test generates and replays in LIBERO's environment (one may
 # fail): 10 in `make test`; the README's figures are over 20 (LIBERO_REPLAYS=20).
 REPLAYS = int(os.environ.get("LIBERO_REPLAYS", "10"))
@@ -91,17 +94,23 @@ def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, sim: SimSet
     return [o.id for o in objects]
 
 
-def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: Path) -> tuple[Pictures, float]:
-    """Our frames against LIBERO's own render at LIBERO's initial states of a suite (LIBERO's or
-    LIBERO-PRO's): `cases` are (task number in the suite's order, state); the fixtures posed as
-    LIBERO drew them for each. Returns the pictures' figures and the farthest any object stands
-    from where LIBERO puts it (m)."""
+_LIBEROS_RENDERS: dict[str, Path] = {}  # request -> LIBERO's frames of it: each look is compared with one render
+
+
+def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: Path, look: str = FAST) -> tuple[Pictures, float]:
+    """Our frames, drawn with `look`, against LIBERO's own render at LIBERO's initial states of a
+    suite (LIBERO's or LIBERO-PRO's): `cases` are (task number in the suite's order, state); the
+    fixtures posed as LIBERO drew them for each. Returns the pictures' figures and the farthest
+    any object stands from where LIBERO puts it (m)."""
     chosen = suite_of(CanonicalOptions(suite=suite))
     names = list(libero.tasks(suite))
     request = {"suite": suite, "size": LIBERO.image_size, "cases": [list(c) for c in cases], "tasks": names}
-    theirs = np.load(liberos_own("render", request, tmp_path / f"{suite}.npz"), allow_pickle=True)
-    sim = world_sim(chosen.world)
-    scene = scene_for(chosen.inventory(), sim.profile, chosen.world.name)
+    key = json.dumps(request, sort_keys=True)
+    if key not in _LIBEROS_RENDERS:
+        _LIBEROS_RENDERS[key] = liberos_own("render", request, tmp_path / f"{suite}.npz")
+    theirs = np.load(_LIBEROS_RENDERS[key], allow_pickle=True)
+    sim = world_sim(chosen.world, look=look)
+    scene = scene_for(chosen.inventory(), sim.profile, chosen.world.name, look)
     cameras, m = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), scene.model
     kept = {f.name: (m.body(f"{f.name}_main").id,) for f in chosen.world.fixtures}
     kept = {name: (b, m.body_pos[b].copy(), m.body_quat[b].copy()) for name, (b,) in kept.items()}
