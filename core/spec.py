@@ -69,7 +69,7 @@ class TaskSpec:
 # How the cameras draw a scene (oracle/scene.py, oracle/render.py). `fast`: meshes lightened and
 # no reflections, a mirror top stood in for by a plate (README: rendering). `full`: every mesh as
 # its file has it and MuJoCo's reflections, as the world's own simulator draws it (LIBERO's
-# scanned basket and bowls, its mirror stove top), for about 3x the frame's rendering time.
+# scanned basket and bowls, its mirror stove top), at 2.7-3.9x the generation time (README: look=full).
 FAST, FULL = "fast", "full"
 LOOKS = (FAST, FULL)
 
