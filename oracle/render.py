@@ -31,7 +31,7 @@ class Cameras:
         scene.model.vis.global_.offwidth = scene.model.vis.global_.offheight = size
         self.renderer = mujoco.Renderer(scene.model, size, size)
         flags = self.renderer.scene.flags
-        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):
+        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_SKYBOX):
             flags[flag] = False
         flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = scene.look == FULL
         self.options = {c: self._option(scene.layout.cameras[c]) for c in cameras}
