@@ -147,17 +147,6 @@ def _mirror_plates(root: ET.Element, world: worlds.World) -> None:
                 ET.SubElement(body, "geom", {**plate, "contype": "0", "conaffinity": "0", "mass": "0"})
 
 
-def _lookat_quat(pos: tuple[float, ...], target: tuple[float, ...]) -> np.ndarray:
-    forward = np.subtract(target, pos)
-    z = -forward / np.linalg.norm(forward)  # MuJoCo cameras look along their -z axis
-    x = np.cross([0.0, 0.0, 1.0], z)
-    x /= np.linalg.norm(x)
-    rot = np.stack([x, np.cross(z, x), z], axis=1)
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, rot.flatten())
-    return quat
-
-
 def _servo_and_gravcomp(root: ET.Element) -> None:
     """Arm torque motors -> position servos (torque limits kept); gravity-compensate the robot."""
     for i, motor in enumerate(root.find("actuator").findall("motor")):  # type: ignore[union-attr]
@@ -194,7 +183,9 @@ def _configure(root: ET.Element, world: worlds.World) -> None:
     for node in root.iter("camera"):
         if node.get("name") == NATIVE.cameras[AGENTVIEW] and cam.lookat is not None:
             node.set("pos", " ".join(map(str, cam.pos)))
-            node.set("quat", " ".join(f"{v:.6f}" for v in _lookat_quat(cam.pos, cam.lookat)))
+            quat = np.zeros(4)
+            mujoco.mju_mat2Quat(quat, cam.rotation().flatten())
+            node.set("quat", " ".join(f"{v:.6f}" for v in quat))
             node.set("fovy", str(cam.fovy))
 
 

@@ -10,13 +10,16 @@ import pytest
 
 import referents
 from core import worlds
-from core.layout import NATIVE
+from core.layout import AGENTVIEW, LAYOUTS, NATIVE
 from core.spec import SimSettings
 from core.worlds.native import TABLE_TOP_Z
-from gen.plan import plan
+from gen.plan import default_sim, plan
 from helpers import visible_bodies
 from oracle.render import Cameras
-from oracle.scene import Scene, _hull_distance, scene_for
+from oracle.scene import Scene, _hull_distance, scene_for, spec_scene
+
+
+AGENTVIEW_OF = {name: next(c for c, model in p.cameras.items() if model == NATIVE.cameras[AGENTVIEW]) for name, p in LAYOUTS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -77,6 +80,27 @@ def test_every_object_is_in_frame_and_parked_ones_are_not(scene: Scene) -> None:
         for camera in NATIVE.cameras:
             seen = visible_bodies(scene, camera)
             assert not [b for b in parked if seen.get(b.body_id)], f"a parked object shows in {camera}"
+
+
+@pytest.mark.parametrize("name", ["object", "libero_object"])
+def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
+    """The agentview camera's projection (what the pointer loss aims at, train/fit.py) lands on
+    each object's pixels in the rendered frames: a lookat camera, and LIBERO's quat camera in its
+    mirrored profile."""
+    referent = referents.load(name)
+    sim = default_sim(referent)
+    camera = AGENTVIEW_OF[sim.profile]
+    for spec in plan(referent, 2, seed=3, sim=sim):
+        scene = spec_scene(spec)
+        scene.reset(spec)
+        cams = Cameras(scene, 128, (camera,))
+        labels = cams.labels()[camera]
+        cams.close()
+        objects = [o for o in spec.objects if o.id in scene.placed]
+        pixels = worlds.world(sim.world).agentview.project(np.array([o.pos for o in objects]), 128, sim.layout.mirrored)
+        for obj, (column, row) in zip(objects, pixels):
+            near = labels[int(row) - 2 : int(row) + 3, int(column) - 2 : int(column) + 3]
+            assert (near == scene.model.body(scene.placed[obj.id].body_id).name.removesuffix("_main")).any(), obj.id
 
 
 def test_reset_poses_objects_from_the_spec(scene: Scene) -> None:

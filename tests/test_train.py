@@ -24,7 +24,7 @@ from gen.lerobot_writer import Episode, Layout, LeRobotWriter
 from gen.stats import image_histogram
 from gen.video import encode_episode
 from helpers import make_dataset
-from train.fit import TrainConfig, fit, kept_steps, schedule, snapshot_file
+from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
 
 
 @pytest.fixture(scope="module")
@@ -138,6 +138,29 @@ def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_datase
     assert not (tmp_path / "ckpt").exists()
 
 
+def test_the_pointer_is_taught_where_the_target_is_until_the_grasp(object_dataset: Path) -> None:
+    """point_weight: the loss is least where the map peaks on the target's pixel, follows the
+    image shift, and counts only the frames before the gripper first closes."""
+    from train import data
+
+    frames = data.load(str(object_dataset))
+    reaching = until_grasp(frames)
+    for start, end in zip(frames.starts, frames.ends):
+        first = start + int(np.argmin(reaching[start:end]))
+        assert reaching[start] and not reaching[end - 1] and frames.action[first, -1] > 0
+        assert (frames.action[start:first, -1] <= 0).all()
+    images = np.zeros((8, 64, 64, 3), np.uint8)
+    images[:, 20, 40] = 255  # row 20, column 40
+    moved, offsets = _shift(images, 4, np.random.default_rng(1))
+    assert offsets.any(axis=1).sum() >= 4
+    for image, (dx, dy) in zip(moved, offsets):
+        assert [tuple(p) for p in np.argwhere(image[:, :, 0])] == [(20 + dy, 40 + dx)]
+    logits = torch.full((2, 16, 16), -5.0)
+    logits[0, 5, 10] = logits[1, 10, 5] = 5.0  # a 64 px image's row 20, column 40 is cell (5, 10)
+    losses = point_loss(logits, torch.tensor([[40.0, 20.0]] * 2), 64)
+    assert losses[0] < losses[1]
+
+
 def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: Path) -> None:
     """`dataset=[a,b]`: the union's frames, episodes and instructions, statistics over all frames,
     batches drawn from each dataset equally; datasets that disagree are refused in one line."""
@@ -155,7 +178,7 @@ def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: P
     np.testing.assert_allclose(union.stats["observation.state"]["std"], both.std(0), rtol=1e-5, atol=1e-7)
     drawn = union.source[data.sample(union, np.random.default_rng(0), 4000, balance=True)]
     assert abs(np.mean(drawn == 1) - 0.5) < 0.05  # equal shares although the datasets differ in size
-    fit(TrainConfig(dataset=[str(object_dataset), str(color)], out=str(tmp_path / "ckpt"), steps=2, batch_size=4), progress=False)
+    fit(TrainConfig(dataset=[str(object_dataset), str(color)], out=str(tmp_path / "ckpt"), steps=2, batch_size=4, point_weight=1.0), progress=False)
     assert (tmp_path / "ckpt" / "model.pt").is_file()
     small = make_dataset(tmp_path / "small", "referent=color", "n=2", "image_size=32", "seed=3")
     refused = _train(f"dataset=[{object_dataset},{small}]", f"out={tmp_path / 'no'}")

@@ -41,7 +41,7 @@ from core.exam import read
 from eval.policies import FeatureMismatch
 from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
-from train.stages import Ledger, cell, commit, exam_report, generate_once, schedule, train_log, value
+from train.stages import Ledger, cell, commit, exam_report, generate_once, recipe, train_log, value
 
 PARTS = ("axes", "loo", "tiers")
 AXES = ("object", "color", "category", "ordinal", "relation", "negation", "composition")
@@ -160,7 +160,7 @@ def _train(options: AxesOptions, name: str, datasets: list[Path], steps: int, le
     log = train_log(ckpt)
     if log is not None and log["steps"] > steps:
         raise UserError(f"{ckpt} holds a {log['steps']}-step run, more than the {steps} asked for; choose another out=")
-    if log is None or schedule(log["config"]) != schedule(asdict(cfg)):
+    if log is None or recipe(log["config"]) != recipe(asdict(cfg)):
         if not options.train:
             return None
         start = time.perf_counter()

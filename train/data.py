@@ -47,6 +47,7 @@ class Frames:
     ends: np.ndarray  # one past the last frame of each episode
     stats: dict[str, dict[str, np.ndarray]]
     target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
+    target_world: np.ndarray | None  # (episodes,) the world each episode's scene is in (a mix's may differ)
     source: np.ndarray  # the dataset each frame comes from (index into `sources`)
     sources: list[str]
     profile: str
@@ -174,6 +175,7 @@ def union(parts: list[Frames]) -> Frames:
     frame_offsets = np.cumsum([0] + [len(p) for p in parts])
     episode_offsets = np.cumsum([0] + [len(p.starts) for p in parts])
     targets = [p.target for p in parts]
+    scene_worlds = [p.target_world for p in parts]
     # one camera at a time, dropping each part's copy as it goes: the union costs half a copy more, not two
     images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in list(parts[0].images)}
     return Frames(
@@ -187,6 +189,7 @@ def union(parts: list[Frames]) -> Frames:
         ends=np.concatenate([p.ends + off for p, off in zip(parts, frame_offsets)]),
         stats=_pooled({STATE_KEY: [p.state for p in parts], ACTION_KEY: [p.action for p in parts]}),
         target=None if any(t is None for t in targets) else np.concatenate(targets),  # type: ignore[arg-type]
+        target_world=None if any(w is None for w in scene_worlds) else np.concatenate(scene_worlds),  # type: ignore[arg-type]
         source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
         sources=[s for p in parts for s in p.sources],
         profile=parts[0].profile,
@@ -230,6 +233,7 @@ def _load(root: Path) -> Frames:
         tmp = cache.with_suffix(".tmp.npz")
         np.savez(tmp, **images)
         tmp.replace(cache)
+    targets = _targets(root)
     return Frames(
         images=images,
         state=np.stack(data[STATE_KEY].to_numpy()).astype(np.float32),
@@ -240,7 +244,8 @@ def _load(root: Path) -> Frames:
         starts=episodes["dataset_from_index"].to_numpy(np.int64),
         ends=episodes["dataset_to_index"].to_numpy(np.int64),
         stats=stats,
-        target=_targets(root),
+        target=targets[0] if targets else None,
+        target_world=targets[1] if targets else None,
         source=np.zeros(len(data), np.int64),
         sources=[str(root)],
         profile=profile.name,
@@ -248,17 +253,19 @@ def _load(root: Path) -> Frames:
     )
 
 
-def _targets(root: Path) -> np.ndarray | None:
-    """Start position of each episode's target object (None for datasets without scene records)."""
+def _targets(root: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """Start position of each episode's target object, and the world its scene is in (None for
+    datasets without scene records)."""
     path = root / SCENES_PATH
     if not path.is_file():
         return None
     records = parquet.read(path).sort_values("episode_index")
-    out = []
+    positions, scene_worlds = [], []
     for scene, target in zip(records["scene"], records["target"]):
-        objects = {o["id"]: o["pos"] for o in json.loads(scene)["objects"]}
-        out.append(objects[target])
-    return np.asarray(out, np.float32)
+        parsed = json.loads(scene)
+        positions.append(next(o["pos"] for o in parsed["objects"] if o["id"] == target))
+        scene_worlds.append(parsed.get("world", "native"))
+    return np.asarray(positions, np.float32), np.asarray(scene_worlds)
 
 
 def _world(root: Path) -> str:

@@ -4,7 +4,11 @@ behaviour cloning of action chunks.
 Each step samples frames (with several datasets, from each equally often unless
 `balance=false`), shifts the images by a few pixels (augmentation), encodes each
 distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
-normalised actions, masked past the episode's end). The learning rate can warm up over
+normalised actions, masked past the episode's end). With `point_weight`, the agentview camera's
+first keypoint map is also taught where the named object is in the picture (its scene position
+seen through the world's camera, shifted with the image), on the frames before the gripper first
+closes: a dense signal that finds the named object where the auxiliary head's three numbers did
+not (LIBERO-Object's small groceries, README). The learning rate can warm up over
 `warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step, over every
 step after the warm-up or, with `decay`, only the last `decay` steps (a constant rate, then a
 cool-down: the run can be extended and cooled again, see `resume`). Floor 1 keeps it constant.
@@ -73,6 +77,7 @@ class TrainConfig:
     feed_located: bool = False  # the action head also reads the auxiliary prediction (see train/model.py)
     state_noise: float = 0.3  # Gaussian noise on the normalised state, so vision must carry the plan
     aux_weight: float = 1.0  # weight of the where-is-the-target loss (needs meta/scenes.parquet)
+    point_weight: float = 0.0  # weight of the pointer loss: where in the agentview picture the target is, until the grasp
     seed: int = 0
     threads: int = 2
     bf16: bool = False  # bf16 autocast; measured 15x slower than fp32 on this machine's torch build
@@ -116,13 +121,49 @@ def schedule(cfg: TrainConfig, step: int) -> float:
     return cfg.lr_floor + (1 - cfg.lr_floor) * 0.5 * (1 + np.cos(np.pi * min(1.0, progress)))
 
 
-def _shift(images: np.ndarray, pixels: int, rng: np.random.Generator) -> np.ndarray:
-    if pixels <= 0:
-        return images
+def _shift(images: np.ndarray, pixels: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Each image moved by up to `pixels` either way (edges repeated), and how far each moved,
+    (n, 2) as (columns, rows)."""
     n, h, w, _ = images.shape
+    if pixels <= 0:
+        return images, np.zeros((n, 2))
     padded = np.pad(images, ((0, 0), (pixels, pixels), (pixels, pixels), (0, 0)), mode="edge")
     dy, dx = rng.integers(0, 2 * pixels + 1, size=(2, n))
-    return np.stack([padded[i, dy[i] : dy[i] + h, dx[i] : dx[i] + w] for i in range(n)])
+    moved = np.stack([padded[i, dy[i] : dy[i] + h, dx[i] : dx[i] + w] for i in range(n)])
+    return moved, np.stack([pixels - dx, pixels - dy], axis=1)
+
+
+def pixels(frames: data.Frames, mirrored: bool) -> np.ndarray:
+    """Where each episode's target starts in its agentview frames, (episodes, 2) as (column, row),
+    seen through the camera of the world its scene is in."""
+    out = np.empty((len(frames.starts), 2))
+    for name in np.unique(frames.target_world):
+        chosen = frames.target_world == name
+        out[chosen] = worlds.world(str(name)).agentview.project(frames.target[chosen], frames.image_size, mirrored)
+    return out
+
+
+def until_grasp(frames: data.Frames) -> np.ndarray:
+    """Per frame, whether it comes before its episode's first closed-gripper action: while the
+    target still stands where the episode's scene put it."""
+    closing = frames.action[:, -1] > 0
+    first = np.array([s + (np.argmax(closing[s:e]) if closing[s:e].any() else e - s) for s, e in zip(frames.starts, frames.ends)])
+    return np.arange(len(frames)) < first[frames.episode]
+
+
+def point_loss(logits: torch.Tensor, pixels: torch.Tensor, image_size: int, sigma: float = 1.0) -> torch.Tensor:
+    """Cross-entropy of the pointer's map (B, h, w) against a Gaussian of `sigma` cells around
+    each target pixel (B, 2: column, row in the image's pixels), per frame (B,)."""
+    import torch
+
+    b, h, w = logits.shape
+    cells = pixels * torch.tensor([w / image_size, h / image_size]) - 0.5
+    xs, ys = torch.arange(w, dtype=torch.float32), torch.arange(h, dtype=torch.float32)
+    gx = torch.exp(-0.5 * ((xs[None] - cells[:, :1]) / sigma) ** 2)
+    gy = torch.exp(-0.5 * ((ys[None] - cells[:, 1:]) / sigma) ** 2)
+    wanted = gy[:, :, None] * gx[:, None, :]
+    wanted = wanted / wanted.sum(dim=(1, 2), keepdim=True).clamp(min=1e-12)
+    return -(wanted * torch.log_softmax(logits.float().reshape(b, -1), dim=-1).reshape(b, h, w)).sum(dim=(1, 2))
 
 
 def fit(cfg: TrainConfig, progress: bool = True) -> dict:
@@ -160,6 +201,12 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             frozen_text = model.embed(frames.tasks)
     action = torch.from_numpy(frames.action)
     target_pos = torch.from_numpy(frames.target) if frames.target is not None else None
+    pointing = cfg.point_weight > 0
+    if pointing:
+        if frames.target is None:
+            raise data.DatasetError(f"point_weight={cfg.point_weight} needs the datasets' scene records (meta/scenes.parquet)")
+        target_pixel = pixels(frames, model.config.features.mirrored)
+        reaching = until_grasp(frames)
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
@@ -169,7 +216,8 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
         index = data.sample(frames, rng, cfg.batch_size, cfg.balance)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
-        images = {c: torch.from_numpy(_shift(frames.images[c][index], cfg.shift, rng)) for c in model.cameras}
+        shifted = {c: _shift(frames.images[c][index], cfg.shift, rng) for c in model.cameras}
+        images = {c: torch.from_numpy(moved) for c, (moved, _) in shifted.items()}
         state = torch.from_numpy(frames.state[index])
         tasks = frames.task[index]
         with torch.autocast("cpu", dtype=torch.bfloat16, enabled=cfg.bf16):
@@ -178,13 +226,17 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
             else:
                 unique, inverse = np.unique(tasks, return_inverse=True)
                 text = model.embed([frames.tasks[t] for t in unique])[torch.from_numpy(inverse)]
-            predicted, located = model(images, state, text, cfg.state_noise)
+            predicted, located, pointer = model(images, state, text, cfg.state_noise)
         goal = model.normalise(action[torch.from_numpy(targets)])
         weight = torch.from_numpy(mask).float().unsqueeze(-1)
         loss = ((predicted.float() - goal).abs() * weight).sum() / (weight.sum() * goal.shape[-1])
         if target_pos is not None and cfg.aux_weight > 0:
             where = model.locate_target(target_pos[torch.from_numpy(frames.episode[index])])
             loss = loss + cfg.aux_weight * (located.float() - where).abs().mean()
+        if pointing:
+            pixel = target_pixel[frames.episode[index]] + shifted[model.pointer_camera][1]
+            per_frame = point_loss(pointer, torch.from_numpy(pixel).float(), frames.image_size)
+            loss = loss + cfg.point_weight * (per_frame * torch.from_numpy(reaching[index]).float()).mean()
         for group, peak in zip(optimizer.param_groups, peaks):
             group["lr"] = peak * schedule(cfg, step)
         optimizer.zero_grad(set_to_none=True)

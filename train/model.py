@@ -11,6 +11,8 @@ looks where the instruction points, and an MLP predicts a chunk of actions.
   is supervised with the scene records (training only) and makes grounding the instruction in
   the image the easiest way to lower the loss; at test time the policy sees only images, state
   and words, and the battery reads this prediction as its motor-free grounding readout.
+* Pointer: the agentview camera's first keypoint map, which `point_weight` (train/fit.py)
+  teaches to peak on the named object in the picture; its keypoint reaches the head as the others do.
 * Head: keypoints, pooled features, the instruction embedding and normalised state -> MLP ->
   `chunk` future actions (normalised with the dataset's stats). With `feed_located` it also
   reads the auxiliary head's prediction (detached: only the auxiliary loss shapes it), three
@@ -32,7 +34,7 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch import nn  # noqa: E402
 
-from core.layout import NATIVE, FeatureLayout, layout  # noqa: E402
+from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout  # noqa: E402
 
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
@@ -107,7 +109,9 @@ class CameraEncoder(nn.Module):
         self.softmax = SpatialSoftmax()
         self.out_dim = 2 * config.keypoints + w
 
-    def forward(self, image: torch.Tensor, text: torch.Tensor) -> torch.Tensor:
+    def forward(self, image: torch.Tensor, text: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """-> features (B, out_dim), and the keypoint maps' logits (B, keypoints, h, w) at the
+        resolution of the last block (a quarter of the image's)."""
         b, _, h, w = image.shape
         ys, xs = torch.meshgrid(torch.linspace(-1, 1, h), torch.linspace(-1, 1, w), indexing="ij")
         x = torch.cat([image, xs.expand(b, 1, h, w), ys.expand(b, 1, h, w)], dim=1)
@@ -118,7 +122,8 @@ class CameraEncoder(nn.Module):
             gamma, beta = gammas_betas[:, offset : offset + c], gammas_betas[:, offset + c : offset + 2 * c]
             offset += 2 * c
             x = F.relu(norm(conv(x)) * (1 + gamma[:, :, None, None]) + beta[:, :, None, None])
-        return torch.cat([self.softmax(self.keypoints(x)), x.mean(dim=(2, 3))], dim=1)
+        maps = self.keypoints(x)
+        return torch.cat([self.softmax(maps), x.mean(dim=(2, 3))], dim=1), maps
 
 
 class TinyPolicy(nn.Module):
@@ -143,6 +148,12 @@ class TinyPolicy(nn.Module):
             std = np.maximum(np.asarray(stats[key]["std"]), 1e-3)
             self.register_buffer(f"{name}_std", torch.as_tensor(std, dtype=torch.float32))
 
+    @property
+    def pointer_camera(self) -> str:
+        """The camera whose first keypoint map is the pointer: the one that sees the whole workspace."""
+        features = self.config.features
+        return next(c for c in features.camera_names if features.cameras[c] == NATIVE.cameras[AGENTVIEW])
+
     def embed(self, instructions: list[str]) -> torch.Tensor:
         """(n, 384) unit-norm sentence embeddings (mean-pooled MiniLM)."""
         tokens = self.tokenizer(instructions, padding=True, truncation=True, max_length=32, return_tensors="pt")
@@ -153,10 +164,13 @@ class TinyPolicy(nn.Module):
 
     def forward(
         self, images: dict[str, torch.Tensor], state: torch.Tensor, text: torch.Tensor, state_noise: float = 0.0
-    ) -> tuple[torch.Tensor, torch.Tensor]:
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Images (B, H, W, 3) uint8 per camera, state (B, state size), text (B, 384) -> normalised
-        actions (B, chunk, action size) and where the named object is (B, 3, normalised: see `locate_target`)."""
-        feats = [self.cameras[c](image.permute(0, 3, 1, 2).float() / 255.0, text) for c, image in images.items()]
+        actions (B, chunk, action size), where the named object is (B, 3, normalised: see
+        `locate_target`), and the pointer: the logits (B, h, w) of the agentview camera's first
+        keypoint map, which training can teach to peak where the named object is (`point_weight`)."""
+        encoded = {c: self.cameras[c](image.permute(0, 3, 1, 2).float() / 255.0, text) for c, image in images.items()}
+        feats = [f for f, _ in encoded.values()]
         s = (state - self.state_mean) / self.state_std
         if state_noise > 0:
             s = s + state_noise * torch.randn_like(s)
@@ -164,7 +178,7 @@ class TinyPolicy(nn.Module):
         located = self.locate(seen)
         inputs = [seen, s, located.detach()] if self.config.feed_located else [seen, s]
         actions = self.head(torch.cat(inputs, dim=1)).reshape(-1, self.config.chunk, self.config.features.action_size)
-        return actions, located
+        return actions, located, encoded[self.pointer_camera][1][:, 0]
 
     def locate_target(self, position: torch.Tensor) -> torch.Tensor:
         """World position -> the auxiliary head's normalised target (from the scenes' centre, 20 cm units)."""

@@ -117,7 +117,7 @@ class CheckpointPolicy:
             frames = {c: np.ascontiguousarray(observation[features.image_key(c)]) for c in self.model.cameras}
             images = {c: torch.from_numpy(frame)[None] for c, frame in frames.items()}
             state = torch.from_numpy(np.asarray(observation[STATE_KEY], np.float32))[None]
-            actions, located = self.model(images, state, self._embeddings[text])
+            actions, located, _ = self.model(images, state, self._embeddings[text])
             return self.model.denormalise(actions)[0].numpy(), self.model.world_position(located)[0].numpy()
 
     def locate(self, observation: dict) -> np.ndarray:

@@ -4,7 +4,7 @@ different sittings.
 
 * a dataset or exam is generated only if its folder holds none;
 * a training run continues from its last matching state (`resume=true`, train/fit.py) and is
-  skipped when finished on the same schedule;
+  skipped when finished on the same recipe (`recipe`);
 * an exam report is taken once, and read back while the weights it was taken with (their
   digest, kept beside it) are still the ones there;
 * each stage's wall time is summed over every invocation that did its work (`timings.json`).
@@ -62,9 +62,10 @@ def train_log(ckpt: Path) -> dict | None:
         return None
 
 
-def schedule(config: dict) -> tuple:
-    """What decides a run's learning rate at every step (runs logged before `decay` existed had none)."""
-    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay"))
+def recipe(config: dict) -> tuple:
+    """What decides a run's weights besides its data and seed: the learning rate at every step, and
+    the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none)."""
+    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight"))
 
 
 def exam_report(

@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from core.catalog import Kind
 
 PHYSICS_DT = 0.002  # simulation timestep, seconds; control periods are whole multiples of it
@@ -46,6 +48,37 @@ class Camera:
     quat: tuple[float, float, float, float] | None = None  # w, x, y, z
     lookat: tuple[float, float, float] | None = None
     fovy: float = 45.0
+
+    def rotation(self) -> np.ndarray:
+        """The camera's axes in the world frame, as the columns of a 3x3 matrix (x right, y up,
+        looking along -z)."""
+        if self.lookat is not None:
+            z = -np.subtract(self.lookat, self.pos)
+            z /= np.linalg.norm(z)
+            x = np.cross([0.0, 0.0, 1.0], z)
+            x /= np.linalg.norm(x)
+            return np.stack([x, np.cross(z, x), z], axis=1)
+        if self.quat is None:
+            raise ValueError("a camera needs a quat or a lookat")
+        w, x, y, z = self.quat
+        return np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+
+    def project(self, points: np.ndarray, size: int, mirrored: bool = False) -> np.ndarray:
+        """World points (n, 3) -> where they appear in this camera's upright square frame of
+        `size` pixels, (n, 2) as (column, row) in pixels from the top-left corner; `mirrored` for
+        frames stored mirrored left to right (core/layout.py). What teaches a policy where, in its
+        picture, the named object stands (train/fit.py)."""
+        local = (np.asarray(points, float) - self.pos) @ self.rotation()
+        focal = size / 2 / np.tan(np.radians(self.fovy) / 2)
+        column = size / 2 + focal * local[:, 0] / -local[:, 2]
+        row = size / 2 - focal * local[:, 1] / -local[:, 2]
+        return np.stack([size - column if mirrored else column, row], axis=1)
 
 
 @dataclass(frozen=True)
