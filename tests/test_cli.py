@@ -172,7 +172,7 @@ def test_every_entry_point_has_help_and_refuses_unknown_options(command: str, po
     assert not any(cwd.iterdir()) and not any(folder.iterdir())
 
 
-@pytest.mark.parametrize("option", ["steps=0", "decay=-1", "lr_floor=2", "finetunes=[bogus]", "data=[]"])
+@pytest.mark.parametrize("option", ["steps=0", "decay=-1", "lr_floor=2", "finetunes=[bogus]", "data=[]", "point_weight=-1"])
 def test_the_experiment_refuses_bad_values_before_any_work(option: str, tmp_path: Path) -> None:
     out = tmp_path / "experiment"
     result = subprocess.run(

@@ -18,8 +18,8 @@ from helpers import visible_bodies
 from oracle.render import Cameras
 from oracle.scene import Scene, _hull_distance, scene_for, spec_scene
 
-
-AGENTVIEW_OF = {name: next(c for c, model in p.cameras.items() if model == NATIVE.cameras[AGENTVIEW]) for name, p in LAYOUTS.items()}
+# each profile's name for the camera that sees the whole workspace
+AGENTVIEW_OF = {name: next(c for c, m in p.cameras.items() if m == NATIVE.cameras[AGENTVIEW]) for name, p in LAYOUTS.items()}
 
 
 @pytest.fixture(scope="module")

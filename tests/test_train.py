@@ -178,7 +178,9 @@ def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: P
     np.testing.assert_allclose(union.stats["observation.state"]["std"], both.std(0), rtol=1e-5, atol=1e-7)
     drawn = union.source[data.sample(union, np.random.default_rng(0), 4000, balance=True)]
     assert abs(np.mean(drawn == 1) - 0.5) < 0.05  # equal shares although the datasets differ in size
-    fit(TrainConfig(dataset=[str(object_dataset), str(color)], out=str(tmp_path / "ckpt"), steps=2, batch_size=4, point_weight=1.0), progress=False)
+    both = [str(object_dataset), str(color)]
+    pointed = TrainConfig(dataset=both, out=str(tmp_path / "ckpt"), steps=2, batch_size=4, point_weight=1.0)
+    fit(pointed, progress=False)
     assert (tmp_path / "ckpt" / "model.pt").is_file()
     small = make_dataset(tmp_path / "small", "referent=color", "n=2", "image_size=32", "seed=3")
     refused = _train(f"dataset=[{object_dataset},{small}]", f"out={tmp_path / 'no'}")

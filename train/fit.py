@@ -25,7 +25,7 @@ import json
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from core import worlds
 from train import data
 from train.model import ModelConfig, TinyPolicy
 from train.policy import MODEL_FILE, save
+
+if TYPE_CHECKING:
+    import torch
 
 LAST = "last.pt"
 STABLE = "stable.pt"  # the training state where the cool-down (`decay`) begins
