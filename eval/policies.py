@@ -18,6 +18,9 @@ learned policy must ignore:
   no camera, so blanking them cannot hurt it);
 * `position` — does what the referent's shortcut does: by default, picks up whatever stands
   nearest the canonical slot (the shortcut a position-reading policy learns);
+* `place` — reads the name only as where its object stood in the confounded data (in LIBERO-Object
+  each grocery always stands in its own task's target region, one of two), and fetches whatever
+  stands there: the shortcut of a policy that learnt the words as place codes;
 * `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
 
 eval/registry.py makes them (and every other policy) by name.
@@ -121,14 +124,30 @@ class Oracle(Scripted):
 
 
 class Position(Scripted):
-    def __init__(self) -> None:
-        super().__init__("position")
+    def __init__(self, name: str = "position") -> None:
+        super().__init__(name)
+
+    def _chosen(self, referent: referents.Referent, context: Context) -> EpisodeSpec:
+        return referent.shortcut(context.spec)
 
     def reset(self, context: Context) -> None:
         referent = referents.load(context.spec.referent, world=context.spec.sim.world)
-        chosen = referent.shortcut(context.spec)
+        chosen = self._chosen(referent, context)
         plan = referents.pick_and_lift if chosen.task.program == "pick" else referent.demo
         self._actions, self._t = self._plan(chosen, plan, context), 0
+
+
+class Place(Position):
+    """The name read only as a place: fetches whatever stands where the named object always
+    stood in the confounded data (the referent's `place`; the shortcut where every name shares
+    one place)."""
+
+    def __init__(self) -> None:
+        super().__init__("place")
+
+    def _chosen(self, referent: referents.Referent, context: Context) -> EpisodeSpec:
+        placed = referent.place(context.spec, context.target)
+        return referent.shortcut(context.spec) if placed is None else placed
 
 
 class Nothing:

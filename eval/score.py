@@ -271,11 +271,12 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     }
     if grounding:
         hits, trials, chances = zip(*grounding)
-        report["grounding"] = {**_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
+        report["grounding"] = {**clustered_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
     return report
 
 
-def _rate(outcomes: Sequence[float], trials: Sequence[int]) -> dict:
+def clustered_rate(outcomes: Sequence[float], trials: Sequence[int]) -> dict:
+    """k/n with its Wilson interval and the interval that resamples whole trials."""
     return {**Rate(float(sum(outcomes)), len(outcomes)).to_dict(), "ci_trials": list(cluster_ci(outcomes, trials))}
 
 
@@ -283,9 +284,9 @@ def _face(entries: list[dict]) -> dict:
     """A face's headline rate with both intervals, its chance and its three landing levels."""
     trials = [e["trial"] for e in entries]
     return {
-        **_rate([float(e["ok"]) for e in entries], trials),
+        **clustered_rate([float(e["ok"]) for e in entries], trials),
         "chance": round(float(np.mean([e["chance"] for e in entries])), 4),
-        "by_level": {level: _rate([float(e["levels"][level]) for e in entries], trials) for level in LEVELS},
+        "by_level": {level: clustered_rate([float(e["levels"][level]) for e in entries], trials) for level in LEVELS},
     }
 
 
@@ -331,7 +332,7 @@ def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: flo
 def _rates(table: dict) -> dict:
     """Per key and face, the rate of its (ok, trial) entries with both intervals."""
     return {
-        key: {face: _rate(*zip(*entries)) for face, entries in faces.items()}
+        key: {face: clustered_rate(*zip(*entries)) for face, entries in faces.items()}
         for key, faces in sorted(table.items(), key=lambda kv: (len(kv[0]), kv[0]))
     }
 
@@ -352,6 +353,16 @@ def exam_label(exam: Exam) -> str:
         f"{suite} canonical exam: LIBERO's own initial states, {per_task} per task, seed {exam.meta.get('seed', '?')} "
         f"({exam.meta['trials']} trials)"
     )
+
+
+def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
+    """Each swap rollout's row -> whether it landed on the named object (5 cm), as `score` counts
+    obeyed name: what lets two policies' swaps be compared row by row."""
+    parsed, obeyed = _parse(logs, exam), {}
+    for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
+        ee, objects, error, _ = parsed[int(row["row"])]
+        obeyed[int(row["row"])] = not error and landed(judge(exam, row, ee, objects)) == (row["target"], row["program"])
+    return obeyed
 
 
 def read_logs(path: Path) -> tuple[pd.DataFrame, str | None]:

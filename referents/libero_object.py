@@ -4,7 +4,8 @@ The groceries are chosen, placed and named as in the object referent (every groc
 and a distractor in every region equally often); the basket, the spec's `container`, stands in
 the last slot of every scene and every target is carried into it (referents/destination.py:
 alternatives, assets and the oracle's plan are the defaults). What is LIBERO-Object's own is here:
-its tasks' scenes (`canonical`) and what a policy that learnt its layouts does (`shortcut`).
+its tasks' scenes (`canonical`) and what a policy that learnt its layouts does (`shortcut`: the
+scene says where; `place`: the name says where).
 """
 
 from __future__ import annotations
@@ -115,6 +116,22 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
         target = problem.objects[problem.goal[0][1]]  # (In <target> basket_1_contain_region)
         if groceries == {c for c in problem.objects.values() if c != _container(cfg).kind}:
             slot = cfg.layout.canonical(next(c.key for c in cfg.objects if c.kind == target))
+    return _fetch(cfg, spec, slot)
+
+
+def place(cfg: ReferentConfig, spec: EpisodeSpec, named: str) -> EpisodeSpec:
+    """What a policy that learnt where each name's grocery stands in LIBERO's layouts does: every
+    grocery is the target of one task and always stands in that task's target region (one of
+    two), so the name alone says where to reach; it fetches whatever stands there. A name LIBERO
+    never gave (a new grocery): region 0, as `shortcut`."""
+    kind = scenery.base_kind(cfg, spec.object(named).kind)
+    keys = [c.key for c in cfg.objects if c.kind == kind]
+    return _fetch(cfg, spec, cfg.layout.canonical(keys[0]) if keys else 0)
+
+
+def _fetch(cfg: ReferentConfig, spec: EpisodeSpec, slot: int) -> EpisodeSpec:
+    """The scene's episode with whatever grocery stands nearest `slot` as its target."""
+    destination = spec.task.params["destination"]
     x, y = cfg.layout.slots[slot]
     chosen = min((o for o in spec.objects if o.id != destination), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
     return replace(spec, target=chosen.id)

@@ -6,6 +6,7 @@ states as an exam on which the reference policies show what instruction blindnes
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -21,8 +22,9 @@ from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS
 from core.worlds import libero
-from eval.battery import take
+from eval.battery import ROLLOUTS, take
 from eval.registry import make
+from eval.score import read_logs, swaps_obeyed
 from gen import scenes
 from gen.canonical import CanonicalOptions, build
 from helpers import (
@@ -153,6 +155,25 @@ def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
     assert position["task"]["rate"] >= 0.8 and position["obeyed_name"]["rate"] <= 0.05
     assert position["true_target"]["rate"] >= 0.8
     assert all(f["k"] == 0 for f in nothing.values())
+
+
+def test_the_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) -> None:
+    """Every LIBERO-Object grocery stands, in its own task, in one of two target regions, and a
+    policy can learn the name as that place. In the alphabet soup's task (the soup in region 0,
+    the salad dressing in region 1), `place` obeys the rename to salad dressing (its own region),
+    takes the soup for milk and butter (region-0 groceries) and the salad dressing for cream cheese
+    and tomato sauce; `swaps_obeyed` reads the same swaps row by row."""
+    reports = canonical_reports(tmp_path, {"place": 1})
+    exam = read(tmp_path / "canonical")
+    first = exam.trials[exam.trials["trial"] == 0]
+    assert "alphabet soup" in first[first["face"] == "task"]["instruction"].iloc[0]
+    faces = reports["place"]["faces"]
+    assert faces["task"]["k"] == 1 and (faces["obeyed_name"]["k"], faces["obeyed_name"]["n"]) == (1, 5)
+    assert faces["true_target"]["k"] == 2 and reports["place"]["reach_probe"]["obeyed_name"]["went_distractor"] == 4
+    logs, _ = read_logs(tmp_path / "place" / ROLLOUTS)
+    obeyed = swaps_obeyed(dataclasses.replace(exam, trials=first), logs)
+    swaps = first[first["face"] == "swap"]
+    assert [obeyed[int(r)] for r in swaps["row"]] == [t == "salad_dressing" for t in swaps["target"]]
 
 
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:

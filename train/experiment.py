@@ -12,7 +12,9 @@ fine-tune the tiny policy on each (LoRA; `finetunes=[lora,full]` adds the full f
 `repeats=2` trains the deconfounded run again on its own data, with its own seed), take the same
 held-out exams with every checkpoint — the deconfounded `split=exam` exam, and in a LIBERO world
 the canonical exam on LIBERO's own initial states (`states` per task, `gen.canonical`) — with the
-`position` shortcut measured on each, and write the results (`docs/RESULTS.md` and
+`position` shortcut measured on each (and, where the referent's confounded data ties each name
+to a place of its own, the `place` shortcut, with every run's obeyed name on the swaps `place`
+does not obey), and write the results (`docs/RESULTS.md` and
 `docs/results.json` natively, `docs/RESULTS_LIBERO.md` and `docs/results_libero.json` for
 LIBERO-Object) with the training curves (loss, and obeyed-name on the first exam's first
 `curve_trials` trials at the kept checkpoints) and, in a LIBERO world, a picture of the policies'
@@ -35,10 +37,21 @@ from pathlib import Path
 
 import referents
 from core import worlds
-from core.exam import read
+from core.exam import Exam, read
 from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
-from train.stages import Ledger, brief, cell, commit, exam_report, generate_once, recipe, train_log, value
+from train.stages import (
+    Ledger,
+    brief,
+    cell,
+    commit,
+    exam_report,
+    generate_once,
+    recipe,
+    reference_report,
+    train_log,
+    value,
+)
 
 FINETUNES = ("lora", "full", "frozen")
 TRAINING_SETS = ("deconfounded", "confounded")  # the headline first, so a stopped run has it
@@ -156,7 +169,9 @@ def _configs(options: ExperimentOptions) -> dict[str, GenConfig]:
     unknown = [f for f in options.finetunes if f not in FINETUNES]
     if unknown or not options.finetunes:
         raise UserError(f"finetunes must be some of {', '.join(FINETUNES)}, got {options.finetunes}")
-    return {name: parse([*args, f"out={out}", "overwrite=true"]) for name, (args, out) in _datasets(options).items()}
+    # resume=true: a generation killed with the experiment continues (a finished one is skipped: generate_once)
+    stages = _datasets(options).items()
+    return {name: parse([*args, f"out={out}", "overwrite=true", "resume=true"]) for name, (args, out) in stages}
 
 
 def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) -> Path | None:
@@ -211,6 +226,7 @@ def run(options: ExperimentOptions) -> dict:
     loaded = {name: read(folder) for name, folder in exams.items()}
     curve_rows = loaded[EXAM].trials[loaded[EXAM].trials["trial"] < options.curve_trials]
     keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
+    places = _places(_referent(options.world), exams, loaded, root, ledger, commands)
 
     rows, not_run, baselines = [], [], {}
     for data_name, finetune, seed in _runs(options):
@@ -264,6 +280,7 @@ def run(options: ExperimentOptions) -> dict:
             report = exam_report(loaded[exam_name], ckpt, loaded[exam_name].trials, report_dir, options.replan, ledger,
                                  f"eval {run_name} {exam_name}")  # fmt: skip
             baselines[exam_name] = report["baseline"]
+            beyond = {"beyond_place": _beyond(loaded[exam_name], report_dir, places[exam_name][1])} if exam_name in places else {}
             rows.append(
                 {
                     "data": data_name,
@@ -276,6 +293,7 @@ def run(options: ExperimentOptions) -> dict:
                     "reach_probe": report["reach_probe"],
                     "distances": report["distances"],
                     "per_object": report.get("per_object"),
+                    **beyond,
                     "final_loss": log["final_loss"],
                     "trainable_parameters": log["trainable_parameters"],
                     "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]],
@@ -287,8 +305,40 @@ def run(options: ExperimentOptions) -> dict:
             )
     for exam_name, faces in baselines.items():  # the measured shortcut on the same exam: what a position-reading policy scores
         rows.append({"data": None, "finetune": None, "policy": "position", "exam": exam_name, "faces": faces})
+    for exam_name, (report, _) in places.items():  # the name read as a place: what a policy that learnt each name's place scores
+        rows.append({"data": None, "finetune": None, "policy": "place", "exam": exam_name, "faces": report["faces"]})
     settings = asdict(options) | {"out": str(root), "point_weight": _point_weight(options)}
     return {"settings": settings, "rows": rows, "not_run": not_run, "commands": commands, "timings_s": ledger.spent}
+
+
+def _places(
+    referent: str, exams: dict[str, Path], loaded: dict[str, Exam], root: Path, ledger: Ledger, commands: list[str]
+) -> dict[str, tuple[dict, dict[int, bool]]]:
+    """Exam -> the `place` shortcut's report and which of its swaps it obeyed, where the referent's
+    confounded data ties each name to a place of its own (LIBERO-Object: two); {} where it does not."""
+    from eval.battery import ROLLOUTS
+    from eval.score import read_logs, swaps_obeyed
+
+    if referents.load(referent).code.place is None:
+        return {}
+    measured = {}
+    for exam_name, folder in exams.items():
+        out = root / "reports" / "place" / exam_name
+        commands.append(f"python -m eval policy=place exam={folder} workers=2 out={out}")
+        report = reference_report(loaded[exam_name], "place", out, ledger, f"place {exam_name}")
+        measured[exam_name] = (report, swaps_obeyed(loaded[exam_name], read_logs(out / ROLLOUTS)[0]))
+    return measured
+
+
+def _beyond(exam: Exam, report_dir: Path, place: dict[int, bool]) -> dict:
+    """Obeyed name (5 cm) on the swaps the `place` shortcut does not obey: there a name read as a
+    place leads elsewhere, so only reading it finds the object."""
+    from eval.battery import ROLLOUTS
+    from eval.score import clustered_rate, read_logs, swaps_obeyed
+
+    mine, trial = swaps_obeyed(exam, read_logs(report_dir / ROLLOUTS)[0]), exam.trials.set_index("row")["trial"]
+    rows = [row for row, obeyed in place.items() if not obeyed]
+    return clustered_rate([float(mine[row]) for row in rows], [int(trial[row]) for row in rows])
 
 
 def _committed(options: ExperimentOptions, run_name: str) -> str:
@@ -317,7 +367,14 @@ def write_docs(results: dict, docs: Path) -> None:
         )
         + ". Rates carry k/n and a 95% interval that resamples whole trials (a trial's rollouts share its scene); "
         "chance for obeyed-name/true-target is 1 / (objects in the scene), and the `position` row is the measured "
-        "shortcut on the same exam. Obeyed name is given at three levels: landed within 5 cm, within 2 cm, achieved "
+        "shortcut on the same exam"
+        + (
+            "; the `place` row is the measured shortcut of a policy that reads the name only as where its object always "
+            "stood in the confounded data, and the last column is obeyed name on the swaps `place` does not obey"
+            if any(r.get("policy") == "place" for r in results["rows"])
+            else ""
+        )
+        + ". Obeyed name is given at three levels: landed within 5 cm, within 2 cm, achieved "
         "the program on the named object.",
     ]
     for exam in exams:
@@ -360,22 +417,27 @@ def write_docs(results: dict, docs: Path) -> None:
     (docs / named.results).write_text("\n".join(lines) + "\n")
 
 
+SHORTCUT_LABELS = {"position": "`position` (shortcut)", "place": "`place` (the name as a place)"}
+
+
 def _table(rows: list[dict]) -> list[str]:
+    beyond = any("beyond_place" in r for r in rows)
     lines = [
         "",
         "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | grounded (first frame) "
-        "| true target | occ | nonsense | chance |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| true target | occ | nonsense | chance |" + (" obeyed where `place` is not |" if beyond else ""),
+        "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if beyond else ""),
     ]
     for r in rows:
         f = r["faces"]
         levels = f["obeyed_name"].get("by_level") or {}
         by = [cell(levels[lv]) if lv in levels else "—" for lv in ("2cm", "achieved")]
-        who = (r["data"], r["finetune"]) if r["data"] else ("—", "`position` (shortcut)")
+        who = (r["data"], r["finetune"]) if r["data"] else ("—", SHORTCUT_LABELS[r["policy"]])
         grounded = cell(r["grounding"]) if "grounding" in r else "—"
         lines.append(
             f"| {who[0]} | {who[1]} | {cell(f['task'])} | {cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
             f"| {cell(f['true_target'])} | {cell(f['occ'])} | {cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
+            + (f" {cell(r['beyond_place']) if 'beyond_place' in r else '—'} |" if beyond else "")
         )
     return lines
 
@@ -393,7 +455,7 @@ def plot_faces(rows: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(9, 3.6))
     width = 0.8 / max(1, len(rows))
     for i, r in enumerate(rows):
-        label = f"{r['data']} {r['finetune']}" if r["data"] else "position (shortcut)"
+        label = f"{r['data']} {r['finetune']}" if r["data"] else SHORTCUT_LABELS[r["policy"]].replace("`", "")
         rates = [r["faces"][f]["rate"] for f in faces]
         lo, hi = zip(*((r["faces"][f].get("ci_trials") or r["faces"][f]["ci"]) for f in faces))
         x = np.arange(len(faces)) + (i - (len(rows) - 1) / 2) * width

@@ -6,16 +6,19 @@ different sittings.
 * a training run continues from its last matching state (`resume=true`, train/fit.py) and is
   skipped when finished on the same recipe (`recipe`);
 * an exam report is taken once, and read back while the weights it was taken with (their
-  digest, kept beside it) are still the ones there;
+  digest, kept beside it) are still the ones there (a reference policy's: while the exam is);
 * each stage's wall time is summed over every invocation that did its work (`timings.json`).
 """
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
+import os
 import shutil
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
@@ -23,22 +26,35 @@ import pandas as pd
 from core.exam import Exam
 from gen.config import GenConfig
 
-WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights it was taken with
+WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights (or, of a reference policy, the exam) it was taken with
 TIMINGS = "timings.json"  # in an experiment's `out`: each stage's wall time
 
 
 class Ledger:
-    """Wall time per stage, summed over every invocation that did the stage's work."""
+    """Wall time per stage, summed over every invocation that did the stage's work (two
+    experiment processes on one `out`, e.g. the arms trained side by side, add to the same file)."""
 
     def __init__(self, root: Path) -> None:
         self.path = root / TIMINGS
-        self.spent: dict[str, float] = json.loads(self.path.read_text()) if self.path.is_file() else {}
+        self.spent: dict[str, float] = self._read()
+
+    def _read(self) -> dict[str, float]:
+        return json.loads(self.path.read_text()) if self.path.is_file() else {}
 
     def spend(self, stage: str, start: float) -> None:
-        """Add the work `stage` did since `start` (a `time.perf_counter()` reading)."""
-        self.spent[stage] = round(self.spent.get(stage, 0.0) + time.perf_counter() - start, 1)
+        """Add the work `stage` did since `start` (a `time.perf_counter()` reading) to the file as it is now."""
+        seconds = time.perf_counter() - start
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.path.write_text(json.dumps(self.spent, indent=2))
+        lock = os.open(self.path.parent, os.O_RDONLY)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            self.spent = self._read()
+            self.spent[stage] = round(self.spent.get(stage, 0.0) + seconds, 1)
+            tmp = self.path.with_suffix(".tmp")
+            tmp.write_text(json.dumps(self.spent, indent=2))
+            tmp.replace(self.path)
+        finally:
+            os.close(lock)  # releases the lock
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
@@ -84,11 +100,33 @@ def exam_report(
     from train.policy import MODEL_FILE, CheckpointPolicy
 
     digest = hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
+
+    def run() -> None:
+        policy = CheckpointPolicy(str(weights), replan)
+        take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options={"replan": replan})
+
+    return _once(out, digest, run, ledger, stage)
+
+
+def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: str) -> dict:
+    """The report of the reference policy `policy` (eval/policies.py) on the whole of `exam`,
+    taken once and read back while the exam is the same."""
+    from eval.baseline import exam_digest
+    from eval.battery import take
+    from eval.registry import make
+
+    def run() -> None:
+        take(exam, exam.trials, make(policy), out, 2, policy, baseline=False)
+
+    return _once(out, exam_digest(exam, policy), run, ledger, stage)
+
+
+def _once(out: Path, digest: str, run: Callable[[], None], ledger: Ledger, stage: str) -> dict:
+    """`out`'s report, taken by `run` unless the one there was taken from what `digest` names."""
     stamp = out / WEIGHTS_DIGEST
     if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
         start = time.perf_counter()
-        policy = CheckpointPolicy(str(weights), replan)
-        take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options={"replan": replan})
+        run()
         stamp.write_text(digest)
         ledger.spend(stage, start)
     return json.loads((out / "report.json").read_text())
