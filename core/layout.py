@@ -61,6 +61,11 @@ class FeatureLayout:
         return tuple(self.cameras)
 
     @property
+    def agentview(self) -> str:
+        """The recorded camera that renders the model's front camera, the one that sees the whole workspace."""
+        return next(c for c, model in self.cameras.items() if model == NATIVE.cameras[AGENTVIEW])
+
+    @property
     def state_size(self) -> int:
         return len(self.state_names)
 

@@ -10,16 +10,13 @@ import pytest
 
 import referents
 from core import worlds
-from core.layout import AGENTVIEW, LAYOUTS, NATIVE
+from core.layout import LAYOUTS, NATIVE
 from core.spec import SimSettings
 from core.worlds.native import TABLE_TOP_Z
 from gen.plan import default_sim, plan
 from helpers import visible_bodies
 from oracle.render import Cameras
 from oracle.scene import Scene, _hull_distance, scene_for, spec_scene
-
-# each profile's name for the camera that sees the whole workspace
-AGENTVIEW_OF = {name: next(c for c, m in p.cameras.items() if m == NATIVE.cameras[AGENTVIEW]) for name, p in LAYOUTS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -89,7 +86,7 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
     mirrored profile."""
     referent = referents.load(name)
     sim = default_sim(referent)
-    camera = AGENTVIEW_OF[sim.profile]
+    camera = LAYOUTS[sim.profile].agentview
     for spec in plan(referent, 2, seed=3, sim=sim):
         scene = spec_scene(spec)
         scene.reset(spec)

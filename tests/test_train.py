@@ -9,6 +9,7 @@ import json
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,7 @@ from gen.stats import image_histogram
 from gen.video import encode_episode
 from helpers import make_dataset
 from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
+from train.stages import TIMINGS, Ledger
 
 
 @pytest.fixture(scope="module")
@@ -135,6 +137,10 @@ def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_datase
     lines = unmakeable.stderr.strip().splitlines()
     assert unmakeable.returncode == 2 and len(lines) == 1 and "train with image_size=64" in lines[0]
     assert "image_size=7" in lines[0] and "regenerate" not in lines[0] and "not a size python -m gen makes" in lines[0]
+    for weight in ("point_weight", "aux_weight"):  # a negative loss weight would train away from the target
+        negative = _train(f"dataset={object_dataset}", f"{weight}=-1", f"out={tmp_path / 'ckpt'}")
+        lines = negative.stderr.strip().splitlines()
+        assert negative.returncode == 2 and len(lines) == 1 and f"{weight} must be at least 0, got -1.0" in lines[0]
     assert not (tmp_path / "ckpt").exists()
 
 
@@ -203,3 +209,14 @@ def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_pat
         assert not report["errors"], report["errors"]
     finally:
         server.kill()
+
+
+def test_two_experiment_processes_add_to_one_ledger(tmp_path: Path) -> None:
+    """The arms of an experiment trained side by side keep both their times in timings.json."""
+    first, second = Ledger(tmp_path), Ledger(tmp_path)
+    start = time.perf_counter() - 1.0
+    first.spend("train a", start)
+    second.spend("train b", start)
+    first.spend("train a", start)
+    spent = json.loads((tmp_path / TIMINGS).read_text())
+    assert set(spent) == {"train a", "train b"} and spent["train a"] >= 2.0 > spent["train b"] >= 1.0

@@ -18,7 +18,7 @@ def validate(cfg: TrainConfig) -> None:
     for name in ("steps", "batch_size", "chunk", "threads", "log_every", "save_every"):
         if getattr(cfg, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(cfg, name)}")
-    for name in ("warmup", "decay", "keep_every"):
+    for name in ("warmup", "decay", "keep_every", "aux_weight", "point_weight"):
         if getattr(cfg, name) < 0:
             raise UserError(f"{name} must be at least 0, got {getattr(cfg, name)}")
     if not 0 <= cfg.lr_floor <= 1:

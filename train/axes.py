@@ -96,9 +96,10 @@ def _check(options: AxesOptions) -> None:
 
 
 def _gen(options: AxesOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
-    """A `python -m gen` command line and its validated config."""
+    """A `python -m gen` command line and its validated config (resume=true: a generation killed
+    with the experiment continues; a finished one is skipped before it is asked)."""
     line = [*args, f"image_size={options.image_size}", f"out={out}"]
-    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true"])
+    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true", "resume=true"])
 
 
 def _stages(options: AxesOptions) -> dict[str, tuple[str, GenConfig]]:

@@ -249,7 +249,7 @@ def _load(root: Path) -> Frames:
         source=np.zeros(len(data), np.int64),
         sources=[str(root)],
         profile=profile.name,
-        world=_world(root),
+        world=str(targets[1][0]) if targets else "native",  # the first episode's
     )
 
 
@@ -266,15 +266,6 @@ def _targets(root: Path) -> tuple[np.ndarray, np.ndarray] | None:
         positions.append(next(o["pos"] for o in parsed["objects"] if o["id"] == target))
         scene_worlds.append(parsed.get("world", "native"))
     return np.asarray(positions, np.float32), np.asarray(scene_worlds)
-
-
-def _world(root: Path) -> str:
-    """The world of the dataset's first episode (native for datasets without scene records)."""
-    path = root / SCENES_PATH
-    if not path.is_file():
-        return "native"
-    spec = json.loads(parquet.read(path).sort_values("episode_index")["spec"].iloc[0])
-    return str(spec["sim"].get("world", "native"))
 
 
 def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:

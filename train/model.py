@@ -34,7 +34,7 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch import nn  # noqa: E402
 
-from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout  # noqa: E402
+from core.layout import NATIVE, FeatureLayout, layout  # noqa: E402
 
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
@@ -151,8 +151,7 @@ class TinyPolicy(nn.Module):
     @property
     def pointer_camera(self) -> str:
         """The camera whose first keypoint map is the pointer: the one that sees the whole workspace."""
-        features = self.config.features
-        return next(c for c in features.camera_names if features.cameras[c] == NATIVE.cameras[AGENTVIEW])
+        return self.config.features.agentview
 
     def embed(self, instructions: list[str]) -> torch.Tensor:
         """(n, 384) unit-norm sentence embeddings (mean-pooled MiniLM)."""
