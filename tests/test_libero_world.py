@@ -163,17 +163,17 @@ def test_the_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) 
     the salad dressing in region 1), `place` obeys the rename to salad dressing (its own region),
     takes the soup for milk and butter (region-0 groceries) and the salad dressing for cream cheese
     and tomato sauce; `swaps_obeyed` reads the same swaps row by row."""
-    reports = canonical_reports(tmp_path, {"place": 1})
+    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical")))
     exam = read(tmp_path / "canonical")
     first = exam.trials[exam.trials["trial"] == 0]
     assert "alphabet soup" in first[first["face"] == "task"]["instruction"].iloc[0]
-    faces = reports["place"]["faces"]
-    assert faces["task"]["k"] == 1 and (faces["obeyed_name"]["k"], faces["obeyed_name"]["n"]) == (1, 5)
-    assert faces["true_target"]["k"] == 2 and reports["place"]["reach_probe"]["obeyed_name"]["went_distractor"] == 4
-    logs, _ = read_logs(tmp_path / "place" / ROLLOUTS)
-    obeyed = swaps_obeyed(dataclasses.replace(exam, trials=first), logs)
     swaps = first[first["face"] == "swap"]
-    assert [obeyed[int(r)] for r in swaps["row"]] == [t == "salad_dressing" for t in swaps["target"]]
+    report, _ = take(exam, swaps, make("place"), tmp_path / "place", baseline=False)
+    obeyed, true_target = report["faces"]["obeyed_name"], report["faces"]["true_target"]
+    assert (obeyed["k"], obeyed["n"], true_target["k"], report["reach_probe"]["obeyed_name"]["went_distractor"]) == (1, 5, 2, 4)
+    logs, _ = read_logs(tmp_path / "place" / ROLLOUTS)
+    by_row = swaps_obeyed(dataclasses.replace(exam, trials=swaps), logs)
+    assert [by_row[int(r)] for r in swaps["row"]] == [t == "salad_dressing" for t in swaps["target"]]
 
 
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
