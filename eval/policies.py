@@ -18,7 +18,7 @@ learned policy must ignore:
   no camera, so blanking them cannot hurt it);
 * `position` — does what the referent's shortcut does: by default, picks up whatever stands
   nearest the canonical slot (the shortcut a position-reading policy learns);
-* `place` — reads the name only as where its object stood in the confounded data (in LIBERO-Object
+* `named_place` — reads the name only as where its object stood in the confounded data (in LIBERO-Object
   each grocery always stands in its own task's target region, one of two), and fetches whatever
   stands there: the shortcut of a policy that learnt the words as place codes;
 * `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
@@ -137,16 +137,16 @@ class Position(Scripted):
         self._actions, self._t = self._plan(chosen, plan, context), 0
 
 
-class Place(Position):
+class NamedPlace(Position):
     """The name read only as a place: fetches whatever stands where the named object always
-    stood in the confounded data (the referent's `place`; the shortcut where every name shares
+    stood in the confounded data (the referent's `named_place`; the shortcut where every name shares
     one place)."""
 
     def __init__(self) -> None:
-        super().__init__("place")
+        super().__init__("named_place")
 
     def _chosen(self, referent: referents.Referent, context: Context) -> EpisodeSpec:
-        placed = referent.place(context.spec, context.target)
+        placed = referent.named_place(context.spec, context.target)
         return referent.shortcut(context.spec) if placed is None else placed
 
 

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from importlib.metadata import EntryPoint, entry_points
 
 from eval.lerobot_policy import LeRobotPolicy
-from eval.policies import Nothing, Oracle, Place, Policy, PolicyError, Position, Random
+from eval.policies import NamedPlace, Nothing, Oracle, Policy, PolicyError, Position, Random
 from eval.remote import RemotePolicy
 
 GROUP = "deconfound.policies"
@@ -84,7 +84,7 @@ def make(name: str, **options: object) -> Policy:
 
 register("oracle", Oracle)
 register("position", Position)
-register("place", Place)
+register("named_place", NamedPlace)
 register("nothing", Nothing)
 register("random", Random)
 register("remote", RemotePolicy)

@@ -14,8 +14,8 @@ module (`<type>.py`) that keeps to the contract in `referents.contract`:
 * `shortcut(config, spec) -> EpisodeSpec` — what an instruction-blind policy does in a scene,
   which the `position` reference policy demonstrates (default: pick up whatever stands nearest
   the canonical slot);
-* `place(config, spec, named) -> EpisodeSpec` — what a policy does that reads the name only as
-  the place its object always stood in the confounded data, which the `place` reference policy
+* `named_place(config, spec, named) -> EpisodeSpec` — what a policy does that reads the name only as
+  the place its object always stood in the confounded data, which the `named_place` reference policy
   demonstrates (default: none; a type whose confounded data puts every target in one slot has
   nothing to add to `shortcut`);
 * `words(config)` — what else `targets=`, `distractor_only=` and `holdout=` may name besides the
@@ -111,14 +111,14 @@ class Referent:
             return self.code.shortcut(self.config, spec)
         return destination.restored(spec, self.code.shortcut(self.config, destination.without(spec)))
 
-    def place(self, spec: EpisodeSpec, named: str) -> EpisodeSpec | None:
+    def named_place(self, spec: EpisodeSpec, named: str) -> EpisodeSpec | None:
         """The episode a policy would do that reads the name `named` (an object id) only as a
-        place (what `place` demonstrates); None for a type whose names share one place."""
-        if self.code.place is None:
+        place (what `named_place` demonstrates); None for a type whose names share one place."""
+        if self.code.named_place is None:
             return None
         if destination.container(self.config) is None:
-            return self.code.place(self.config, spec, named)
-        return destination.restored(spec, self.code.place(self.config, destination.without(spec), named))
+            return self.code.named_place(self.config, spec, named)
+        return destination.restored(spec, self.code.named_place(self.config, destination.without(spec), named))
 
     def _seen(self, spec: EpisodeSpec) -> EpisodeSpec:
         """The scene as the type sees it: a world's container (referents/destination.py) left out."""

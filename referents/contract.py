@@ -76,8 +76,8 @@ class TypeModule:
     assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
     validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
     shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical  # what `position` demonstrates
-    place: Callable[[ReferentConfig, EpisodeSpec, str], EpisodeSpec] | None = (
-        None  # what `place` demonstrates: the name read as where its object stood (None: one place for every name)
+    named_place: Callable[[ReferentConfig, EpisodeSpec, str], EpisodeSpec] | None = (
+        None  # what `named_place` demonstrates: the name read as where its object stood (None: one place for every name)
     )
     canonical: Callable[[ReferentConfig, Problem], Design | None] | None = (
         None  # a LIBERO task's own scene (gen.canonical), None for a task it cannot do

@@ -5,7 +5,7 @@ and a distractor in every region equally often); the basket, the spec's `contain
 the last slot of every scene and every target is carried into it (referents/destination.py:
 alternatives, assets and the oracle's plan are the defaults). What is LIBERO-Object's own is here:
 its tasks' scenes (`canonical`) and what a policy that learnt its layouts does (`shortcut`: the
-scene says where; `place`: the name says where).
+scene says where; `named_place`: the name says where).
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     return _fetch(cfg, spec, slot)
 
 
-def place(cfg: ReferentConfig, spec: EpisodeSpec, named: str) -> EpisodeSpec:
+def named_place(cfg: ReferentConfig, spec: EpisodeSpec, named: str) -> EpisodeSpec:
     """What a policy that learnt where each name's grocery stands in LIBERO's layouts does: every
     grocery is the target of one task and always stands in that task's target region (one of
     two), so the name alone says where to reach; it fetches whatever stands there. A name LIBERO

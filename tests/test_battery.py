@@ -132,9 +132,10 @@ def test_bad_actions_fail_their_trial_and_the_run_goes_on(small_exam: Path, tmp_
 def test_policies_are_made_by_registered_name() -> None:
     """eval registers its own policies; train's `ckpt` comes from its entry point, so eval never
     imports train. A name with a missing or surplus argument is one clear line."""
-    assert names()[:6] == ["oracle", "position", "place", "nothing", "random", "remote:HOST:PORT"] and "ckpt:PATH" in names()
+    assert names()[:6] == ["oracle", "position", "named_place", "nothing", "random", "remote:HOST:PORT"]
+    assert "ckpt:PATH" in names()
     for name, needle in [
-        ("telepathy", "unknown policy 'telepathy'; registered: oracle, position, place, nothing, random, remote:HOST:PORT"),
+        ("telepathy", "unknown policy 'telepathy'; registered: oracle, position, named_place, nothing, random, remote:HOST:PORT"),
         ("ckpt", "policy ckpt needs an argument: ckpt:PATH"),
         ("oracle:x", "policy oracle takes no argument"),
         ("remote:nohost", "must be HOST:PORT"),

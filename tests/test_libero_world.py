@@ -157,10 +157,10 @@ def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
     assert all(f["k"] == 0 for f in nothing.values())
 
 
-def test_the_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) -> None:
+def test_the_named_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) -> None:
     """Every LIBERO-Object grocery stands, in its own task, in one of two target regions, and a
     policy can learn the name as that place. In the alphabet soup's task (the soup in region 0,
-    the salad dressing in region 1), `place` obeys the rename to salad dressing (its own region),
+    the salad dressing in region 1), `named_place` obeys the rename to salad dressing (its own region),
     takes the soup for milk and butter (region-0 groceries) and the salad dressing for cream cheese
     and tomato sauce; `swaps_obeyed` reads the same swaps row by row."""
     build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical")))
@@ -168,10 +168,10 @@ def test_the_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) 
     first = exam.trials[exam.trials["trial"] == 0]
     assert "alphabet soup" in first[first["face"] == "task"]["instruction"].iloc[0]
     swaps = first[first["face"] == "swap"]
-    report, _ = take(exam, swaps, make("place"), tmp_path / "place", baseline=False)
+    report, _ = take(exam, swaps, make("named_place"), tmp_path / "named_place", baseline=False)
     obeyed, true_target = report["faces"]["obeyed_name"], report["faces"]["true_target"]
     assert (obeyed["k"], obeyed["n"], true_target["k"], report["reach_probe"]["obeyed_name"]["went_distractor"]) == (1, 5, 2, 4)
-    logs, _ = read_logs(tmp_path / "place" / ROLLOUTS)
+    logs, _ = read_logs(tmp_path / "named_place" / ROLLOUTS)
     by_row = swaps_obeyed(dataclasses.replace(exam, trials=swaps), logs)
     assert [by_row[int(r)] for r in swaps["row"]] == [t == "salad_dressing" for t in swaps["target"]]
 

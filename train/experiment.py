@@ -13,7 +13,7 @@ fine-tune the tiny policy on each (LoRA; `finetunes=[lora,full]` adds the full f
 held-out exams with every checkpoint — the deconfounded `split=exam` exam, and in a LIBERO world
 the canonical exam on LIBERO's own initial states (`states` per task, `gen.canonical`) — with the
 `position` shortcut measured on each (and, where the referent's confounded data ties each name
-to a place of its own, the `place` shortcut, with every run's obeyed name on the swaps `place`
+to a place of its own, the `named_place` shortcut, with every run's obeyed name on the swaps it
 does not obey), and write the results (`docs/RESULTS.md` and
 `docs/results.json` natively, `docs/RESULTS_LIBERO.md` and `docs/results_libero.json` for
 LIBERO-Object) with the training curves (loss, and obeyed-name on the first exam's first
@@ -226,7 +226,7 @@ def run(options: ExperimentOptions) -> dict:
     loaded = {name: read(folder) for name, folder in exams.items()}
     curve_rows = loaded[EXAM].trials[loaded[EXAM].trials["trial"] < options.curve_trials]
     keep_every = options.steps // options.curve_points if options.curve_points > 1 else 0
-    places = _places(_referent(options.world), exams, loaded, root, ledger, commands)
+    places = _named_places(_referent(options.world), exams, loaded, root, ledger, commands)
 
     rows, not_run, baselines = [], [], {}
     for data_name, finetune, seed in _runs(options):
@@ -280,7 +280,9 @@ def run(options: ExperimentOptions) -> dict:
             report = exam_report(loaded[exam_name], ckpt, loaded[exam_name].trials, report_dir, options.replan, ledger,
                                  f"eval {run_name} {exam_name}")  # fmt: skip
             baselines[exam_name] = report["baseline"]
-            beyond = {"beyond_place": _beyond(loaded[exam_name], report_dir, places[exam_name][1])} if exam_name in places else {}
+            beyond = {}
+            if exam_name in places:
+                beyond["beyond_named_place"] = _beyond(loaded[exam_name], report_dir, places[exam_name][1])
             rows.append(
                 {
                     "data": data_name,
@@ -306,32 +308,32 @@ def run(options: ExperimentOptions) -> dict:
     for exam_name, faces in baselines.items():  # the measured shortcut on the same exam: what a position-reading policy scores
         rows.append({"data": None, "finetune": None, "policy": "position", "exam": exam_name, "faces": faces})
     for exam_name, (report, _) in places.items():  # the name read as a place: what a policy that learnt each name's place scores
-        rows.append({"data": None, "finetune": None, "policy": "place", "exam": exam_name, "faces": report["faces"]})
+        rows.append({"data": None, "finetune": None, "policy": "named_place", "exam": exam_name, "faces": report["faces"]})
     settings = asdict(options) | {"out": str(root), "point_weight": _point_weight(options)}
     return {"settings": settings, "rows": rows, "not_run": not_run, "commands": commands, "timings_s": ledger.spent}
 
 
-def _places(
+def _named_places(
     referent: str, exams: dict[str, Path], loaded: dict[str, Exam], root: Path, ledger: Ledger, commands: list[str]
 ) -> dict[str, tuple[dict, dict[int, bool]]]:
-    """Exam -> the `place` shortcut's report and which of its swaps it obeyed, where the referent's
+    """Exam -> the `named_place` shortcut's report and which of its swaps it obeyed, where the referent's
     confounded data ties each name to a place of its own (LIBERO-Object: two); {} where it does not."""
     from eval.battery import ROLLOUTS
     from eval.score import read_logs, swaps_obeyed
 
-    if referents.load(referent).code.place is None:
+    if referents.load(referent).code.named_place is None:
         return {}
     measured = {}
     for exam_name, folder in exams.items():
-        out = root / "reports" / "place" / exam_name
-        commands.append(f"python -m eval policy=place exam={folder} workers=2 out={out}")
-        report = reference_report(loaded[exam_name], "place", out, ledger, f"place {exam_name}")
+        out = root / "reports" / "named_place" / exam_name
+        commands.append(f"python -m eval policy=named_place exam={folder} workers=2 out={out}")
+        report = reference_report(loaded[exam_name], "named_place", out, ledger, f"named_place {exam_name}")
         measured[exam_name] = (report, swaps_obeyed(loaded[exam_name], read_logs(out / ROLLOUTS)[0]))
     return measured
 
 
 def _beyond(exam: Exam, report_dir: Path, place: dict[int, bool]) -> dict:
-    """Obeyed name (5 cm) on the swaps the `place` shortcut does not obey: there a name read as a
+    """Obeyed name (5 cm) on the swaps the `named_place` shortcut does not obey: there a name read as a
     place leads elsewhere, so only reading it finds the object."""
     from eval.battery import ROLLOUTS
     from eval.score import clustered_rate, read_logs, swaps_obeyed
@@ -369,9 +371,9 @@ def write_docs(results: dict, docs: Path) -> None:
         "chance for obeyed-name/true-target is 1 / (objects in the scene), and the `position` row is the measured "
         "shortcut on the same exam"
         + (
-            "; the `place` row is the measured shortcut of a policy that reads the name only as where its object always "
-            "stood in the confounded data, and the last column is obeyed name on the swaps `place` does not obey"
-            if any(r.get("policy") == "place" for r in results["rows"])
+            "; the `named_place` row is the measured shortcut of a policy that reads the name only as where its object always "
+            "stood in the confounded data, and the last column is obeyed name on the swaps `named_place` does not obey"
+            if any(r.get("policy") == "named_place" for r in results["rows"])
             else ""
         )
         + ". Obeyed name is given at three levels: landed within 5 cm, within 2 cm, achieved "
@@ -417,15 +419,15 @@ def write_docs(results: dict, docs: Path) -> None:
     (docs / named.results).write_text("\n".join(lines) + "\n")
 
 
-SHORTCUT_LABELS = {"position": "`position` (shortcut)", "place": "`place` (the name as a place)"}
+SHORTCUT_LABELS = {"position": "`position` (shortcut)", "named_place": "`named_place` (the name as a place)"}
 
 
 def _table(rows: list[dict]) -> list[str]:
-    beyond = any("beyond_place" in r for r in rows)
+    beyond = any("beyond_named_place" in r for r in rows)
     lines = [
         "",
         "| data | fine-tune | task | obeyed name (5 cm) | obeyed (2 cm) | obeyed (achieved) | grounded (first frame) "
-        "| true target | occ | nonsense | chance |" + (" obeyed where `place` is not |" if beyond else ""),
+        "| true target | occ | nonsense | chance |" + (" obeyed where `named_place` is not |" if beyond else ""),
         "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if beyond else ""),
     ]
     for r in rows:
@@ -437,7 +439,7 @@ def _table(rows: list[dict]) -> list[str]:
         lines.append(
             f"| {who[0]} | {who[1]} | {cell(f['task'])} | {cell(f['obeyed_name'])} | {by[0]} | {by[1]} | {grounded} "
             f"| {cell(f['true_target'])} | {cell(f['occ'])} | {cell(f['nonsense'])} | {f['obeyed_name']['chance']:.0%} |"
-            + (f" {cell(r['beyond_place']) if 'beyond_place' in r else '—'} |" if beyond else "")
+            + (f" {cell(r['beyond_named_place']) if 'beyond_named_place' in r else '—'} |" if beyond else "")
         )
     return lines
 
