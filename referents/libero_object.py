@@ -115,7 +115,7 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
         problem = libero.problem(suite, task)
         target = problem.objects[problem.goal[0][1]]  # (In <target> basket_1_contain_region)
         if groceries == {c for c in problem.objects.values() if c != _container(cfg).kind}:
-            slot = cfg.layout.canonical(next(c.key for c in cfg.objects if c.kind == target))
+            slot = _home(cfg, target)
     return _fetch(cfg, spec, slot)
 
 
@@ -124,9 +124,13 @@ def named_place(cfg: ReferentConfig, spec: EpisodeSpec, named: str) -> EpisodeSp
     grocery is the target of one task and always stands in that task's target region (one of
     two), so the name alone says where to reach; it fetches whatever stands there. A name LIBERO
     never gave (a new grocery): region 0, as `shortcut`."""
-    kind = scenery.base_kind(cfg, spec.object(named).kind)
+    return _fetch(cfg, spec, _home(cfg, scenery.base_kind(cfg, spec.object(named).kind)))
+
+
+def _home(cfg: ReferentConfig, kind: str) -> int:
+    """The target region (slot) of the LIBERO task whose target is `kind`; 0 for a kind LIBERO never targets."""
     keys = [c.key for c in cfg.objects if c.kind == kind]
-    return _fetch(cfg, spec, cfg.layout.canonical(keys[0]) if keys else 0)
+    return cfg.layout.canonical(keys[0]) if keys else 0
 
 
 def _fetch(cfg: ReferentConfig, spec: EpisodeSpec, slot: int) -> EpisodeSpec:
