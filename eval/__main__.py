@@ -2,7 +2,8 @@
 
 python -m eval policy=oracle exam=datasets/object-exam workers=2
 
-Runs the exam's rollouts in our simulator with the policy (oracle, position, nothing, random,
+Runs the exam's rollouts in our simulator (or, with sim=libero, in LIBERO's own: eval/libero_sim.py)
+with the policy (oracle, position, nothing, random,
 remote:HOST:PORT, ckpt:PATH or any other registered one: eval/registry.py), logs them to
 `rollouts.parquet`, scores the logs with eval/score.py and writes report.json, report.md and
 report.html to `out` (eval/battery.py). Every finished rollout is kept as it ends: an interrupted
@@ -36,6 +37,7 @@ class EvalOptions:
     keys: str = "dataset"  # remote policies: dataset (the exam's keys) | libero (what openpi's LIBERO client sends)
     replan: int | None = None  # chunking policies (ckpt, remote): actions executed per predicted chunk; default theirs
     device: str | None = None  # lerobot checkpoints: the torch device to run on (default cpu)
+    sim: str = "ours"  # where the rollouts run: ours (our rebuild of the exam's world) | libero (LIBERO's own simulator)
 
 
 def check_out(out: Path, overwrite: bool) -> None:
@@ -59,9 +61,13 @@ def evaluate(options: EvalOptions) -> None:
         raise UserError(f"workers must be at least 1, got {options.workers}")
     if options.rows is not None and options.rows < 1:
         raise UserError(f"rows must be at least 1, got {options.rows}")
+    from eval import libero_sim
     from eval.baseline import exam_digest
     from eval.battery import kept_rollouts, take  # the simulator stack loads only for valid input
     from eval.rollout import ProfileMismatch
+
+    if options.sim not in libero_sim.SIMS:
+        raise UserError(f"sim must be one of {', '.join(libero_sim.SIMS)}, got {options.sim!r}")
 
     if options.replan is not None and options.replan < 1:
         raise UserError(f"replan must be at least 1, got {options.replan}")
@@ -76,12 +82,15 @@ def evaluate(options: EvalOptions) -> None:
             raise UserError(
                 f"keys=libero sends LIBERO's features; this exam is profile {exam.profile} (make it with profile=libero)"
             )
+        if options.sim == "libero":
+            libero_sim.check(exam, options.policy)
         # the default report folder names the exam by its content too: two exams of one folder name never share it
         named = f"{exam.root.resolve().name}-{exam_digest(exam)[:8]}"
-        out = Path(options.out or Path("runs") / named / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
+        where = "" if options.sim == "ours" else f"-{options.sim}"
+        out = Path(options.out or Path("runs") / named / (re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy) + where))
         check_out(out, options.overwrite)
         policy = make(options.policy, **policy_options)
-    except (ExamError, PolicyError) as exc:
+    except (ExamError, PolicyError, libero_sim.SimUnavailable) as exc:
         raise UserError(str(exc)) from None
     rows = exam.trials if options.rows is None else exam.trials.head(options.rows)
     kept = len(kept_rollouts(out).saved()) if options.resume else 0
@@ -96,15 +105,17 @@ def evaluate(options: EvalOptions) -> None:
             policy_options=policy_options,
             resume=options.resume,
             discard=options.overwrite,
+            sim=options.sim,
         )
     except (ProfileMismatch, FeatureMismatch) as exc:
         raise UserError(str(exc)) from None
-    except OSError as exc:
+    except (OSError, libero_sim.SimFailed) as exc:
         raise Failed(f"{type(exc).__name__}: {exc}") from None
     faces, ran = report["faces"], len(rows) - kept
     rate = f" ({60 * ran / seconds:.1f}/min)" if ran and seconds > 0 else ""
     resumed = f", {kept} kept from the interrupted take" if kept else ""
-    print(f"{report['policy']} on {report['exam']}: {ran} rollouts in {seconds:.0f} s{rate}{resumed}")
+    where = " in LIBERO's own simulator" if options.sim == "libero" else ""
+    print(f"{report['policy']} on {report['exam']}{where}: {ran} rollouts in {seconds:.0f} s{rate}{resumed}")
     for face in ("task", "obeyed_name", "true_target", "occ", "nonsense"):
         if face in faces:
             f = faces[face]

@@ -32,8 +32,8 @@ from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
 from eval.policies import Policy
 from eval.registry import make
 from eval.report import write_reports
-from eval.rollout import Runner, run_chunk
-from eval.score import POLICY_KEY, read_logs, score
+from eval.rollout import OurSim, Runner, make_sim, run_chunk
+from eval.score import POLICY_KEY, SIM_KEY, read_logs, score
 from gen.partial import Partial
 from gen.workers import die_with
 
@@ -74,6 +74,7 @@ def take(
     policy_options: dict | None = None,
     resume: bool = False,
     discard: bool = True,
+    sim: str = OurSim.name,
 ) -> tuple[dict, float]:
     """Run `rows` (some or all of `exam.trials`) with `policy`, write rollouts.parquet and the
     reports to `out`; returns the report and the seconds the rollouts run now took (the shortcut
@@ -81,19 +82,23 @@ def take(
     and a `policy_name`, contiguous chunks of rows run in processes that each rebuild the policy
     from its name and `policy_options` (eval/registry.py); the logs are the same either way.
     An interrupted take's rollouts are continued with `resume`, discarded with `discard`, and
-    refused with neither; interrupting this one raises KeyboardInterrupt saying what was kept."""
+    refused with neither; interrupting this one raises KeyboardInterrupt saying what was kept.
+    `sim` is where the rollouts run: our simulator, or LIBERO's own (`libero`, eval/libero_sim.py)."""
     check = getattr(policy, "check", None)
     if check is not None:  # a checkpoint that cannot read this exam stops here, before any rollout
         check(exam.features)
     ids = [int(r) for r in rows["row"]]
     run = {"exam": exam_digest(exam), "rows": ids, "policy": policy.name, "policy_name": policy_name, "options": policy_options}
+    if sim != OurSim.name:  # a take in another simulator resumes only there
+        run["sim"] = sim
     with kept_rollouts(out) as partial:
         partial.start(run, resume, discard)
         try:
             start = time.perf_counter()
-            _run(rows[~rows["row"].isin(partial.saved())], policy, partial, workers, policy_name, policy_options)
+            _run(exam, rows[~rows["row"].isin(partial.saved())], policy, partial, workers, policy_name, policy_options, sim)
             seconds = time.perf_counter() - start
-            report = _report(exam, rows, policy, [partial.load(i) for i in ids], partial.root / "report", workers, baseline)
+            logs = [partial.load(i) for i in ids]
+            report = _report(exam, rows, policy, logs, partial.root / "report", workers, baseline, sim)
         except KeyboardInterrupt:
             kept = len(partial.saved() & set(ids))
             raise KeyboardInterrupt(
@@ -107,7 +112,14 @@ def take(
 
 
 def _run(
-    rows: pd.DataFrame, policy: Policy, partial: Partial, workers: int, policy_name: str | None, policy_options: dict | None
+    exam: Exam,
+    rows: pd.DataFrame,
+    policy: Policy,
+    partial: Partial,
+    workers: int,
+    policy_name: str | None,
+    policy_options: dict | None,
+    sim: str,
 ) -> None:
     """Run `rows`, each rollout saved to `partial` as it ends."""
     if rows.empty:
@@ -116,20 +128,24 @@ def _run(
         chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]
         # Ctrl-C reaches the whole process group: the workers ignore it, this process stops the pool
         with multiprocessing.get_context("spawn").Pool(len(chunks), initializer=_worker, initargs=(os.getpid(),)) as pool:
-            pool.starmap(run_chunk, [(policy_name, c, policy_options, partial) for c in chunks])
+            pool.starmap(run_chunk, [(policy_name, c, policy_options, partial, sim, exam.root) for c in chunks])
     else:
-        runner = Runner(policy)
-        for _, row in tqdm(rows.iterrows(), total=len(rows), desc=policy.name, unit="rollout"):
-            partial.save(int(row["row"]), runner.run(row).to_row())
-        runner.close()
+        runner = Runner(policy, make_sim(sim, exam))
+        try:
+            for _, row in tqdm(rows.iterrows(), total=len(rows), desc=policy.name, unit="rollout"):
+                partial.save(int(row["row"]), runner.run(row).to_row())
+        finally:
+            runner.close()
 
 
-def _report(exam: Exam, rows: pd.DataFrame, policy: Policy, logs: list[dict], staged: Path, workers: int, baseline: bool) -> dict:
+def _report(
+    exam: Exam, rows: pd.DataFrame, policy: Policy, logs: list[dict], staged: Path, workers: int, baseline: bool, sim: str
+) -> dict:
     """Score `logs` from the written rollouts.parquet, as the offline scorer would, and write every
     report file to `staged`."""
     staged.mkdir(parents=True, exist_ok=True)
     table = pa.Table.from_pylist(logs)
-    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode()}), staged / ROLLOUTS)
+    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode(), SIM_KEY: sim.encode()}), staged / ROLLOUTS)
     logged, _ = read_logs(staged / ROLLOUTS)
     report = score(dataclasses.replace(exam, trials=rows.reset_index(drop=True)), logged, policy.name)
     if baseline and policy.name == SHORTCUT:

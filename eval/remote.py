@@ -69,6 +69,11 @@ class RemotePolicy:
         self._queue = []
         self._client.reset()
 
+    def wants_observation(self) -> bool:
+        """Whether the next act() reads its observation: not while it executes a chunk (the runner
+        then draws no frames)."""
+        return not self._queue
+
     def act(self, observation: dict) -> np.ndarray:
         if not self._queue:
             if self.keys == "libero":

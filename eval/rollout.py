@@ -5,22 +5,27 @@ and every object's position at each control step (step 0 is the initial state), 
 steps taken and, when the rollout broke, why. rollouts.parquet columns: row (int), steps (int),
 ee (list of [x, y, z]), objects (JSON `{id: [[x, y, z], ...]}`), error (str or null), and
 optionally located ([x, y, z] or null: where a policy that says so — it has `locate(observation)`
-— believes the named object stands, asked on the first frame; the grounding readout).
+— believes the named object stands, asked on the first frame; the grounding readout) and
+sim_success (bool: a simulator's own verdict on the row's ask at the end, where it has one: LIBERO's
+predicates under `sim=libero`).
 """
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import pandas as pd
 
+from core.exam import Exam, read
 from core.layout import IMAGE_PREFIX, LAYOUTS, NATIVE, STATE_KEY, TASK_KEY, FeatureLayout
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
 from eval.registry import make
+from eval.score import SIM_SUCCESS
 from oracle.render import Cameras
 from oracle.scene import Scene, spec_scene
 
@@ -35,17 +40,19 @@ class Log:
     objects: dict[str, list[list[float]]] = field(default_factory=dict)
     error: str | None = None
     located: list[float] | None = None
+    sim_success: bool | None = None  # the simulator's own verdict on the row's ask (LIBERO's predicates), where it has one
 
     @property
     def steps(self) -> int:
         return max(len(self.ee) - 1, 0)
 
-    def record(self, scene: Scene) -> None:
+    def record(self, scene: Scene | Sim) -> None:
         self.ee.append([float(v) for v in scene.ee_pos()])
         for k, pos in scene.positions().items():
             self.objects.setdefault(k, []).append(list(pos))
 
     def to_row(self) -> dict:
+        verdict = {} if self.sim_success is None else {SIM_SUCCESS: self.sim_success}
         return {
             "row": self.row,
             "steps": self.steps,
@@ -53,6 +60,7 @@ class Log:
             "objects": json.dumps(self.objects),
             "error": self.error,
             "located": self.located,
+            **verdict,
         }
 
 
@@ -89,20 +97,84 @@ def check_action(action: object, features: FeatureLayout = NATIVE) -> tuple[np.n
     return a.astype(np.float32), None
 
 
-class Runner:
-    """Runs rollouts for one policy, keeping a renderer per scene when the policy needs images."""
+class Sim(Protocol):
+    """Where a rollout runs: it starts a row, steps an action, says where the hand and the objects
+    are, observes as the exam's profile records, and may judge the row's ask itself."""
 
-    def __init__(self, policy: Policy) -> None:
-        self.policy = policy
+    name: str
+
+    def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None: ...
+
+    def step(self, action: np.ndarray) -> None: ...
+
+    def ee_pos(self) -> np.ndarray: ...
+
+    def positions(self) -> dict[str, tuple[float, ...]]: ...
+
+    def observe(self, instruction: str, occluded: bool, images: bool) -> dict: ...
+
+    def verdict(self, row: pd.Series) -> bool | None: ...
+
+    def close(self) -> None: ...
+
+
+class OurSim:
+    """Our rebuild of the exam's world (oracle/scene.py): where exams run unless `sim=libero` says
+    LIBERO's own simulator (eval/libero_sim.py, the same methods). A renderer is kept per scene."""
+
+    name = "ours"
+
+    def __init__(self) -> None:
         self._cameras: dict[tuple, Cameras] = {}
+        self.scene: Scene | None = None
+        self.cameras: Cameras | None = None
 
-    def cameras(self, scene: Scene, spec: EpisodeSpec) -> Cameras | None:
-        if not self.policy.needs_images:
-            return None
-        key = (scene, spec.sim.image_size, spec.sim.cameras)  # a scene per inventory, profile, world and look
-        if key not in self._cameras:
-            self._cameras[key] = Cameras(scene, spec.sim.image_size, spec.sim.cameras)
-        return self._cameras[key]
+    def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None:
+        """Put the row's scene in its trial's recorded initial state."""
+        self.scene = scene = spec_scene(spec)
+        scene.reset(spec)
+        scene.set_physics_state(np.asarray(row["initial_state"]))
+        self.cameras = None
+        if render:
+            key = (scene, spec.sim.image_size, spec.sim.cameras)  # a scene per inventory, profile, world and look
+            if key not in self._cameras:
+                self._cameras[key] = Cameras(scene, spec.sim.image_size, spec.sim.cameras)
+            self.cameras = self._cameras[key]
+
+    def step(self, action: np.ndarray) -> None:
+        self._scene.step(action)
+
+    def ee_pos(self) -> np.ndarray:
+        return self._scene.ee_pos()
+
+    def positions(self) -> dict[str, tuple[float, float, float]]:
+        return self._scene.positions()
+
+    def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
+        return observe(self._scene, self.cameras if images else None, instruction, occluded)
+
+    def verdict(self, row: pd.Series) -> bool | None:
+        """The simulator's own judgement of the row's ask: ours is the scorer's, from the log."""
+        return None
+
+    @property
+    def _scene(self) -> Scene:
+        assert self.scene is not None, "begin() a row first"
+        return self.scene
+
+    def close(self) -> None:
+        for cams in self._cameras.values():
+            cams.close()
+
+
+class Runner:
+    """Runs rollouts for one policy in one simulator. A policy that says its next action will not
+    read the observation (`wants_observation()` false: it is executing a chunk) is handed one without
+    frames, which are then not drawn."""
+
+    def __init__(self, policy: Policy, sim: Sim | None = None) -> None:
+        self.policy = policy
+        self.sim = sim or OurSim()
 
     def run(self, row: pd.Series) -> Log:
         spec = EpisodeSpec.from_json(row["spec"])
@@ -114,18 +186,17 @@ class Runner:
         except Exception as exc:  # a broken policy fails its rollout, not the run
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
-        features = spec.sim.layout
-        scene = spec_scene(spec)
-        scene.reset(spec)
-        scene.set_physics_state(start)
-        cameras = self.cameras(scene, spec)
-        log.record(scene)
+        features, sim, render = spec.sim.layout, self.sim, self.policy.needs_images
+        sim.begin(row, spec, render)
+        log.record(sim)
         for _ in range(features.settle_steps):  # as the profile's own environment starts a rollout
-            scene.step(features.hold_action(spec.sim.robot_home))
-            log.record(scene)
+            sim.step(features.hold_action(spec.sim.robot_home))
+            log.record(sim)
         locate = getattr(self.policy, "locate", None)
+        wants = getattr(self.policy, "wants_observation", None)
         for t in range(int(row["max_steps"])):
-            observation = observe(scene, cameras, context.instruction, bool(row["occluded"]))
+            images = render and (wants is None or wants() or (t == 0 and locate is not None))
+            observation = sim.observe(context.instruction, bool(row["occluded"]), images)
             try:
                 if t == 0 and locate is not None:
                     log.located = [float(v) for v in locate(observation)]
@@ -141,19 +212,31 @@ class Runner:
             if problem:
                 log.error = f"step {t}: {problem}"
                 break
-            scene.step(action)
-            log.record(scene)
+            sim.step(action)
+            log.record(sim)
+        log.sim_success = sim.verdict(row)
         return log
 
     def close(self) -> None:
-        for cams in self._cameras.values():
-            cams.close()
+        self.sim.close()
 
 
-def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partial: Partial) -> None:
-    """A worker process's share of an exam: its own policy, scenes and renderers; each rollout is
+def make_sim(name: str, exam: Exam) -> Sim:
+    """The simulator `name` (eval/libero_sim.py SIMS) for rollouts of `exam`."""
+    if name == OurSim.name:
+        return OurSim()
+    from eval.libero_sim import LiberoSim
+
+    specs = [EpisodeSpec.from_json(s) for s in exam.trials.drop_duplicates("trial")["spec"]]
+    return LiberoSim(exam.meta, specs)
+
+
+def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partial: Partial, sim: str, exam_root: Path) -> None:
+    """A worker process's share of an exam: its own policy, simulator and renderers; each rollout is
     saved to the partial run as soon as it ends, so an interrupted take keeps it."""
-    runner = Runner(make(policy_name, **(options or {})))
-    for _, row in rows.iterrows():
-        partial.save(int(row["row"]), runner.run(row).to_row())
-    runner.close()
+    runner = Runner(make(policy_name, **(options or {})), make_sim(sim, read(exam_root)))
+    try:
+        for _, row in rows.iterrows():
+            partial.save(int(row["row"]), runner.run(row).to_row())
+    finally:
+        runner.close()

@@ -12,7 +12,8 @@ alternative it achieved, or else on the one it came closest to if that is within
 threshold (5 cm; ties land nowhere).
 
 report.json schema (version 2):
-  policy, exam (its label: `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam
+  policy, simulator (where the rollouts ran: `ours`, `libero` (LIBERO's own, `sim=libero`), or
+      `not recorded` for logs written elsewhere), exam (its label: `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam
       `LIBERO-<Suite> canonical exam: ...`), referent, rollouts, trials
   faces.<face> = {k, n, rate, ci: [lo, hi], ci_trials: [lo, hi], chance, by_level} for task
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
@@ -39,6 +40,9 @@ report.json schema (version 2):
   per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value, with both
       intervals: {k, n, rate, ci, ci_trials})
   errors = [{row, error}] for rollouts that broke (they count as failures)
+  sim_success = {task, swap_success, occ, nonsense: {k, n, rate, ci, ci_trials}}: the simulator's own
+      verdict on each row's ask (LIBERO's `In`/`On` predicates under sim=libero: its `check_success()`
+      on a task row), beside ours in faces; only for logs that carry it
 """
 
 from __future__ import annotations
@@ -65,7 +69,8 @@ from gen.cli import UserError, main
 # landing threshold (m) of each level, or None: the program achieved
 LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}
 HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
-POLICY_KEY = b"deconfound.policy"
+POLICY_KEY, SIM_KEY = b"deconfound.policy", b"deconfound.sim"  # rollouts.parquet's metadata: who acted, and where
+SIM_SUCCESS = "sim_success"  # rollouts.parquet's column of a simulator's own verdict (eval/rollout.py)
 
 
 class LogError(ValueError):
@@ -205,6 +210,8 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     per_slot: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))  # (ok, trial)
     per_object: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))
     grounding: list[tuple[float, int, float]] = []
+    verdicts = _verdicts(logs)  # the simulator's own judgement of each row's ask (sim=libero), where logged
+    judged_by_sim: dict[str, list[tuple[float, int]]] = defaultdict(list)
     errors = []
     for _, row in exam.trials.iterrows():
         ee, objects, error, located = parsed[int(row["row"])]
@@ -238,6 +245,9 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
                 grounding.append((float(nearest == row["target"]), trial, chance))
         else:
             ok = count(face, asked, "achieved")
+        verdict = verdicts.get(int(row["row"]))
+        if verdict is not None:
+            judged_by_sim["swap_success" if face == "swap" else face].append((float(verdict and not error), trial))
         main = "obeyed_name" if face == "swap" else face
         if face in ("task", "swap"):
             per_slot[str(row["slot"])][main].append((float(ok), trial))
@@ -252,6 +262,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     report = {
         "version": REPORT_VERSION,
         "policy": policy,
+        "simulator": logs.attrs.get("sim", "not recorded"),
         "exam": exam_label(exam),
         "referent": exam.meta["referent"],
         "rollouts": len(exam.trials),
@@ -269,10 +280,19 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
         "per_object": _rates(per_object),
         "errors": errors,
     }
+    if judged_by_sim:
+        report["sim_success"] = {face: clustered_rate(*zip(*entries)) for face, entries in judged_by_sim.items()}
     if grounding:
         hits, trials, chances = zip(*grounding)
         report["grounding"] = {**clustered_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
     return report
+
+
+def _verdicts(logs: pd.DataFrame) -> dict[int, bool]:
+    """row -> the simulator's own verdict on its ask (the `sim_success` column), where logged."""
+    if SIM_SUCCESS not in logs:
+        return {}
+    return {int(r): bool(v) for r, v in zip(logs["row"], logs[SIM_SUCCESS]) if v is not None and not pd.isna(v)}
 
 
 def clustered_rate(outcomes: Sequence[float], trials: Sequence[int]) -> dict:
@@ -375,8 +395,12 @@ def read_logs(path: Path) -> tuple[pd.DataFrame, str | None]:
     missing = {"row", "ee", "objects", "error"} - set(table.column_names)
     if missing:
         raise LogError(f"{path} lacks columns {sorted(missing)}")
-    policy = (table.schema.metadata or {}).get(POLICY_KEY)
-    return table.to_pandas(), policy.decode() if policy else None
+    meta = table.schema.metadata or {}
+    logs = table.to_pandas()
+    if SIM_KEY in meta:
+        logs.attrs["sim"] = meta[SIM_KEY].decode()
+    policy = meta.get(POLICY_KEY)
+    return logs, policy.decode() if policy else None
 
 
 @dataclass

@@ -6,9 +6,14 @@
   (OSC_POSE: delta input in the world frame, kp 150, damping ratio 1, output limits 0.05 m /
   0.5 rad, position and orientation uncoupled, nullspace pull to the home joints), computed by
   robosuite's own functions once per physics substep as robosuite's environments call it, the
-  goal set from the action on the first substep of each control period. The gripper follows
-  robosuite 1.4's PandaGripper, which LIBERO ran: the sign of the command moves the finger
-  targets 0.01 of their range per substep.
+  goal set from the action on the first substep of each control period. Where robosuite 1.4,
+  which LIBERO runs, differs from 1.5, it acts as 1.4 does: an action whose rotation is exactly
+  zero keeps the goal orientation (1.4 updates it only for a non-zero rotation), and after a
+  state is restored without a reset (LIBERO's `set_init_state`) the controller's first control
+  step still reads the arm as it stood at the reset (1.4 refreshes what it read only after it
+  has run once); both move the hand during LIBERO's settle steps from its own initial states,
+  and eval/libero_sim.py runs exams in LIBERO to compare. The gripper follows robosuite 1.4's
+  PandaGripper: the sign of the command moves the finger targets 0.01 of their range per substep.
 
 A drive is made for one `Scene` (oracle/scene.py) and shares its model and data.
 """
@@ -36,6 +41,10 @@ class Drive(Protocol):
     def reset(self, home: np.ndarray) -> None:
         """Forget any controller state: the next action starts from the current pose."""
 
+    def restored(self) -> None:
+        """The simulation's state was set from outside (a recorded or another simulator's state)
+        without a reset: what the controller read at its reset is what it acts on first."""
+
     def step(self, action: np.ndarray, substeps: int) -> None:
         """Execute one control period of `substeps` physics steps."""
 
@@ -51,6 +60,9 @@ class JointServo:
         self.model, self.data = model, data
 
     def reset(self, home: np.ndarray) -> None:
+        pass
+
+    def restored(self) -> None:
         pass
 
     def step(self, action: np.ndarray, substeps: int) -> None:
@@ -82,6 +94,7 @@ class OscPose:
         self.initial_joint = np.zeros(len(ids))  # the nullspace target
         self.goal_pos, self.goal_ori = np.zeros(3), np.eye(3)
         self.fingers = np.zeros(2)  # robosuite's gripper `current_action`: [-1, 1] per finger
+        self.stale = False  # robosuite 1.4's `new_update` unset: the next substep acts on what was read at reset
 
     def _update(self) -> None:
         """robosuite's Controller.update with lite physics: the state after mj_step1."""
@@ -103,14 +116,24 @@ class OscPose:
         self.goal_pos, self.goal_ori = np.array(self.ref_pos), np.array(self.ref_ori)
         half = FINGER_OPEN / 2
         self.fingers = np.array([self.data.ctrl[7] / half - 1.0, 1.0 + self.data.ctrl[8] / half])
+        self.stale = False
+
+    def restored(self) -> None:
+        """robosuite 1.4 after LIBERO's set_init_state: its controller keeps the arm it read at the
+        reset (pose, velocities, Jacobians, mass) until it has run once, so the first goal is
+        relative to the reset pose and the first substep's torques are computed for it; the
+        gripper keeps its reset state too."""
+        self.stale = True
 
     def _set_goal(self, action: np.ndarray) -> None:
-        """robosuite's set_goal: delta input in the world frame, goals from the achieved pose."""
+        """robosuite's set_goal: delta input in the world frame, goals from the achieved pose; the
+        orientation goal only for a non-zero rotation (robosuite 1.4's `math.isclose(x, 0.0)`)."""
         import robosuite.utils.transform_utils as T
 
         delta = np.clip(action, -1.0, 1.0) * self.scale
         self.goal_pos = self.ref_pos + delta[0:3]
-        self.goal_ori = np.dot(T.quat2mat(T.axisangle2quat(delta[3:6])), self.ref_ori)
+        if np.any(delta[3:6] != 0.0):
+            self.goal_ori = np.dot(T.quat2mat(T.axisangle2quat(delta[3:6])), self.ref_ori)
 
     def _torques(self) -> np.ndarray:
         """robosuite's OperationalSpaceController.run_controller, uncoupled position and orientation."""
@@ -129,7 +152,9 @@ class OscPose:
         d, n = self.data, len(self.dof)
         for k in range(substeps):
             mujoco.mj_step1(self.model, d)  # kinematics, mass matrix and bias forces for the controller
-            self._update()
+            if not self.stale:
+                self._update()
+            self.stale = False
             if k == 0:
                 self._set_goal(np.asarray(action[:6], float))
             d.ctrl[:n] = np.clip(self._torques(), self.low, self.high)

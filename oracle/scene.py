@@ -473,8 +473,8 @@ class Scene:
         return state
 
     def set_joints(self, qpos: dict[str, np.ndarray], qvel: dict[str, np.ndarray]) -> None:
-        """Set joints by name (another simulator's state of the same bodies, e.g. LIBERO's); the
-        controller restarts from there."""
+        """Set joints by name (another simulator's state of the same bodies, e.g. LIBERO's), as
+        LIBERO's `set_init_state` does: the controller keeps what it read at the reset (drives.py)."""
         m, d = self.model, self.data
         for name, value in qpos.items():
             start = m.joint(name).qposadr[0]
@@ -483,13 +483,14 @@ class Scene:
             start = m.joint(name).dofadr[0]
             d.qvel[start : start + len(value)] = value
         mujoco.mj_forward(m, d)
-        self.drive.reset(self.home)
+        self.drive.restored()
 
     def set_physics_state(self, state: np.ndarray) -> None:
-        """Restore a state `physics_state` returned; the controller restarts from it."""
+        """Restore a state `physics_state` returned; the controller keeps what it read at the reset,
+        as robosuite 1.4's does after LIBERO's `set_init_state` (drives.py)."""
         mujoco.mj_setState(self.model, self.data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
         mujoco.mj_forward(self.model, self.data)
-        self.drive.reset(self.home)
+        self.drive.restored()
 
 
 def axis_angle(wxyz: np.ndarray) -> np.ndarray:

@@ -42,55 +42,14 @@ import os
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
-CAMERAS = ("agentview", "robot0_eye_in_hand")
-REGIONS = {  # LIBERO-Object's placement regions (its BDDL files' ranges), and the basket's bin
-    "target_object_region": (-0.145, -0.265, -0.095, -0.215),
-    "other_object_region_0": (0.025, -0.125, 0.075, -0.075),
-    "other_object_region_1": (-0.175, 0.035, -0.125, 0.085),
-    "other_object_region_2": (0.075, -0.225, 0.125, -0.175),
-    "other_object_region_3": (0.125, 0.005, 0.175, 0.055),
-    "other_object_region_4": (-0.225, -0.105, -0.175, -0.055),
-    "bin_region": (-0.01, 0.25, 0.01, 0.27),
-}
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "eval"))  # the LIBERO side of sim=libero: numpy and LIBERO only
 
-
-def _env(bddl: str, size: int, cameras: bool = True):  # noqa: ANN202  (LIBERO imports only here: the module loads anywhere)
-    from libero.libero.envs import OffScreenRenderEnv
-
-    env = OffScreenRenderEnv(
-        bddl_file_name=bddl, camera_heights=size, camera_widths=size, has_offscreen_renderer=cameras, use_camera_obs=cameras
-    )
-    env.seed(0)
-    env.reset()
-    return env
-
-
-def _task_bddl(suite: str, task: int | str) -> tuple[str, np.ndarray]:
-    """A task's BDDL file and LIBERO's initial states of it: the task by its number in LIBERO's
-    benchmark order, or by name (LIBERO-PRO's suites the benchmark does not list)."""
-    from libero.libero import benchmark, get_libero_path
-
-    if isinstance(task, int):
-        task = benchmark.get_benchmark_dict()[suite]().get_task(task).name
-    with np.load(os.path.join(get_libero_path("init_states"), suite, f"{task}.pruned_init.npz")) as npz:
-        states = np.asarray(npz["states"])
-    return os.path.join(get_libero_path("bddl_files"), suite, f"{task}.bddl"), states
-
-
-def _positions(env) -> list[list]:  # noqa: ANN001
-    sim = env.sim
-    bodies = {name: sim.model.body_name2id(obj.root_body) for name, obj in env.env.objects_dict.items()}
-    return [[name, *map(float, sim.data.body_xpos[body])] for name, body in bodies.items()]
-
-
-def _fixtures(env) -> list[list]:  # noqa: ANN001
-    """[name, x, y, z, qw, qx, qy, qz] of every fixture body: LIBERO draws their poses anew at each reset."""
-    model = env.sim.model
-    bodies = {name: model.body_name2id(obj.root_body) for name, obj in env.env.fixtures_dict.items()}
-    return [[name, *map(float, model.body_pos[b]), *map(float, model.body_quat[b])] for name, b in bodies.items()]
+from libero_server import CAMERAS, fixtures, floor_bddl, make_env, pose_from_record, positions, table_bddl, task_bddl  # noqa: E402
 
 
 def _labels(env, camera: str, size: int, things: list[str]) -> np.ndarray:  # noqa: ANN001
@@ -151,8 +110,8 @@ def render(request: dict, out: str) -> None:
         by_task.setdefault(task, []).append(state)
     names = request.get("tasks")  # a task is its number in LIBERO's benchmark order, or in this list of names
     for task, states in by_task.items():
-        bddl, initial = _task_bddl(request["suite"], names[task] if names else task)
-        env = _env(bddl, request["size"])
+        bddl, initial = task_bddl(request["suite"], names[task] if names else task)
+        env = make_env(bddl, request["size"])
         for state in states:
             obs = env.set_init_state(initial[state])
             things = [*env.env.objects_dict, *env.env.fixtures_dict]
@@ -160,72 +119,10 @@ def render(request: dict, out: str) -> None:
             for cam in CAMERAS:
                 arrays[f"{task}-{state}-{cam}"] = obs[f"{cam}_image"]
                 arrays[f"{task}-{state}-{cam}-labels"] = _labels(env, cam, request["size"], things)
-            arrays[f"{task}-{state}-objects"] = np.array(_positions(env), dtype=object)
-            arrays[f"{task}-{state}-fixtures"] = np.array(_fixtures(env), dtype=object)
+            arrays[f"{task}-{state}-objects"] = np.array(positions(env), dtype=object)
+            arrays[f"{task}-{state}-fixtures"] = np.array(fixtures(env), dtype=object)
         env.close()
     np.savez(out, **arrays)
-
-
-# floor spots out of reach (and behind the agentview camera) for the objects an episode does not use
-PARK = [(1.5 + 0.3 * i, -1.0 + 0.2 * k) for i in range(3) for k in range(12)]
-
-
-def _declared(objects: dict[str, str]) -> list[str]:
-    """`:objects` lines, one per category with all its instances (`milk_1 milk_2 - milk`): LIBERO's
-    parser keeps only the last line of a category."""
-    by_kind: dict[str, list[str]] = {}
-    for instance, kind in objects.items():
-        by_kind.setdefault(kind, []).append(instance)
-    return [f"    {' '.join(instances)} - {kind}" for kind, instances in by_kind.items()]
-
-
-def _bddl(objects: dict[str, str], target: str, container: str) -> str:
-    """LIBERO's floor problem holding `objects` (instance -> category), its goal `target` in
-    `container`; each object starts in a region of its own (LIBERO-Object's, then parking
-    spots), which the recorded initial state then overrides."""
-    regions = list(REGIONS.items()) + [
-        (f"park_region_{k}", (x - 0.02, y - 0.02, x + 0.02, y + 0.02)) for k, (x, y) in enumerate(PARK)
-    ]
-    lines = ["(define (problem LIBERO_Floor_Manipulation)", "  (:domain robosuite)", "  (:language replay)", "  (:regions"]
-    lines += [f"    ({name} (:target floor) (:ranges (({x0} {y0} {x1} {y1}))))" for name, (x0, y0, x1, y1) in regions]
-    lines += [f"    (contain_region (:target {container}))", "  )", "  (:fixtures floor - floor)", "  (:objects"]
-    lines += _declared(objects)
-    lines += ["  )", f"  (:obj_of_interest {target} {container})", "  (:init"]
-    free = [name for name, _ in regions if name != "bin_region"]
-    for i, instance in enumerate(objects):
-        lines.append(f"    (On {instance} floor_{'bin_region' if instance == container else free[i]})")
-    lines += ["  )", f"  (:goal (And (In {target} {container}_contain_region)))", ")"]
-    return "\n".join(lines) + "\n"
-
-
-TABLE_PARK = [(0.42 - 0.08 * i, -0.55 + 0.1 * k) for i in range(2) for k in range(12)]  # at the table's far edge
-
-
-def _table_bddl(suite: str, objects: dict[str, str], goal: str) -> str:
-    """A suite's table (its first task's problem: table, fixtures and their regions) holding `objects`
-    (instance -> category) instead of that task's, each in a region of its own at the table's far
-    edge (the recorded initial state then poses them), and the goal `goal`, e.g. `(On bowl_1 plate_1)`."""
-    bddl, _ = _task_bddl(suite, 0)
-    with open(bddl) as f:
-        text = f.read()
-    problem = text[: text.index("(:objects")]
-    regions_end = problem.rindex("(:fixtures")
-    parks = "".join(
-        f"      (park_region_{k}\n          (:target main_table)\n"
-        f"          (:ranges (({x - 0.01} {y - 0.01} {x + 0.01} {y + 0.01})))\n      )\n"
-        for k, (x, y) in enumerate(TABLE_PARK)
-    )
-    closing = problem.rindex(")", 0, regions_end)  # the regions section's own closing parenthesis
-    problem = problem[:closing] + parks + problem[closing:]
-    declared = text[text.index("(:fixtures") : text.index("(:objects")].split()
-    fixtures = {declared[i - 1] for i, word in enumerate(declared) if word == "-"} - {"main_table"}
-    init = [line.strip() for line in text[text.index("(:init") :].splitlines() if line.strip().startswith("(On ")]
-    init = [line for line in init if line.split()[1] in fixtures]  # where the fixtures stand
-    lines = [problem, "  (:objects", *_declared(objects), "  )"]
-    lines += ["  (:obj_of_interest", *(f"    {i}" for i in objects), "  )", "  (:init", *(f"    {line}" for line in init)]
-    lines += [f"    (On {instance} main_table_park_region_{k})" for k, instance in enumerate(objects)]
-    lines += ["  )", f"  (:goal (And {goal}))", ")"]
-    return "\n".join(lines) + "\n"
 
 
 def _goal(suite: str | None, target: str, container: str) -> str:
@@ -241,27 +138,15 @@ def _environment(request: dict, objects: dict[str, str], target: str, container:
     bddl = os.path.join(tmp, f"{target}-{container}.bddl")
     with open(bddl, "w") as f:
         goal = _goal(suite, target, container)
-        f.write(_table_bddl(suite, objects, goal) if suite else _bddl(objects, target, container))
-    return _env(bddl, size, cameras)
+        f.write(table_bddl(suite, objects, goal) if suite else floor_bddl(objects, [container], goal))
+    return make_env(bddl, size, cameras)
 
 
-def _pose(env, request: dict, episode: dict, objects: dict[str, str], rest: dict) -> dict:  # noqa: ANN001
-    """Set LIBERO's environment to an episode's recorded initial state: the fixtures where the
-    request stands them, the robot's joints, each object of the episode at its pose and the others
-    out of reach; returns the observation there."""
-    model = env.sim.model
-    for name, *pose in request.get("fixtures", []):
-        body = model.body_name2id(env.env.fixtures_dict[name].root_body)
-        model.body_pos[body], model.body_quat[body] = pose[:3], pose[3:]
-    qpos = np.array(env.sim.data.qpos)
-    for j, value in enumerate([*episode["arm"], *episode["fingers"]]):
-        qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
-    placed = {o["instance"]: o for o in episode["objects"]}
-    for k, instance in enumerate(objects):
-        start, end = model.get_joint_qpos_addr(f"{instance}_joint0")
-        o = placed.get(instance) or {**rest[instance], "pos": [*PARK[k], rest[instance]["pos"][2]]}
-        qpos[start:end] = [*o["pos"], *o["quat"]]
-    return env.set_init_state(np.concatenate([[0.0], qpos, np.zeros(model.nv)]))
+def _pose(env, request: dict, episode: dict) -> dict:  # noqa: ANN001
+    """Set LIBERO's environment to an episode's recorded initial state (libero_server.pose_from_record)."""
+    return pose_from_record(
+        env, {"fixtures": request.get("fixtures", []), **{k: episode[k] for k in ("arm", "fingers", "objects")}}
+    )
 
 
 def replay(request: dict, out: str) -> None:
@@ -271,7 +156,6 @@ def replay(request: dict, out: str) -> None:
     the request's `fixtures` ([name, x, y, z, qw, qx, qy, qz]) put them, and its goal LIBERO's `On`."""
     episodes = request["episodes"]
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
-    rest = {o["instance"]: o for e in episodes for o in e["objects"]}  # any recorded pose: its resting orientation
     goals: dict[tuple[str, str], list[int]] = {}
     for i, e in enumerate(episodes):
         goals.setdefault((e["target"], e["container"]), []).append(i)
@@ -281,10 +165,10 @@ def replay(request: dict, out: str) -> None:
             env = _environment(request, objects, target, container, tmp, 32, cameras=False)
             for i in indices:
                 env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
-                _pose(env, request, episodes[i], objects, rest)
+                _pose(env, request, episodes[i])
                 for action in episodes[i]["actions"]:
                     env.step(np.asarray(action, float))
-                results[i] = {"success": bool(env.check_success()), "objects": _positions(env)}
+                results[i] = {"success": bool(env.check_success()), "objects": positions(env)}
             env.close()
     with open(out, "w") as f:
         json.dump(results, f)
@@ -297,7 +181,6 @@ def scenes(request: dict, out: str) -> None:
     `-labels`, `k-things` and `k-objects`, as `render` writes them for an initial state."""
     episodes, size = request["episodes"], request["size"]
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
-    rest = {o["instance"]: o for e in episodes for o in e["objects"]}
     arrays = {}
     with tempfile.TemporaryDirectory() as tmp:
         first = episodes[0]
@@ -305,12 +188,12 @@ def scenes(request: dict, out: str) -> None:
         things = [*env.env.objects_dict, *env.env.fixtures_dict]
         for k, episode in enumerate(episodes):
             env.reset()
-            obs = _pose(env, request, episode, objects, rest)
+            obs = _pose(env, request, episode)
             arrays[f"{k}-things"] = np.array(things)
             for cam in CAMERAS:
                 arrays[f"{k}-{cam}"] = obs[f"{cam}_image"]
                 arrays[f"{k}-{cam}-labels"] = _labels(env, cam, size, things)
-            arrays[f"{k}-objects"] = np.array(_positions(env), dtype=object)
+            arrays[f"{k}-objects"] = np.array(positions(env), dtype=object)
         env.close()
     np.savez(out, **arrays)
 
@@ -352,8 +235,8 @@ def model_arrays(model) -> dict:  # noqa: ANN001
 
 
 def model(request: dict, out: str) -> None:
-    bddl, _ = _task_bddl(request["suite"], request["task"])
-    env = _env(bddl, 32, cameras=False)
+    bddl, _ = task_bddl(request["suite"], request["task"])
+    env = make_env(bddl, 32, cameras=False)
     np.savez(out, **model_arrays(env.sim.model._model))
     env.close()
 
@@ -362,8 +245,8 @@ def bench(request: dict, out: str) -> None:
     """Episodes of `lengths` steps with both cameras' observations, each from a reset environment
     set to the task's first initial state; only the steps are timed (resets are not: LIBERO's
     path is charged less than it costs)."""
-    bddl, states = _task_bddl(request["suite"], request["task"])
-    env = _env(bddl, request["size"])
+    bddl, states = task_bddl(request["suite"], request["task"])
+    env = make_env(bddl, request["size"])
     state = states[0]
     env.set_init_state(state)
     env.step(np.zeros(7))  # the first step compiles robosuite's controller (numba): not timed

@@ -125,6 +125,11 @@ class CheckpointPolicy:
         battery's grounding readout, which does not depend on the motor."""
         return self._forward(observation)[1]
 
+    def wants_observation(self) -> bool:
+        """Whether the next act() reads its observation: not while it executes a chunk (the runner
+        then draws no frames)."""
+        return not self._queue
+
     def act(self, observation: dict) -> np.ndarray:
         if not self._queue:
             self._queue = list(self.chunk(observation)[: self.replan])

@@ -1,0 +1,267 @@
+"""`sim=libero`: an exam's rollouts in LIBERO's own simulator instead of our rebuild of its world.
+
+Each rollout runs in LIBERO's `OffScreenRenderEnv` (LIBERO's code with its robosuite 1.4.0 and
+mujoco, in `.venv-libero`, which `make setup` builds), driven from here through a server process
+(eval/libero_server.py) while the policy runs in this process. Per row:
+
+* the environment: a canonical exam's (`python -m gen.canonical`, LIBERO-PRO suites included) is
+  the task's own BDDL file, set to LIBERO's own initial-state vector of the trial; a generated exam's
+  (`split=exam` in a LIBERO world) is a BDDL problem holding every object the exam uses (LIBERO's
+  floor, or its suite's table and fixtures), each trial's objects posed from its scene record, the
+  others parked out of reach, as the replay tests rebuild episodes;
+* what the policy sees: LIBERO's frames turned 180 degrees (what the libero profile records:
+  upright and mirrored), the 8-d state read off LIBERO's simulator as the profile computes it (grip
+  site, axis-angle of the hand, fingers), the row's instruction; blank frames on the occ face;
+* the settle steps and horizon of the exam (lerobot's LIBERO environment's), the actions stepped
+  as `env.step` steps them;
+* the log: the grip site and every object's position at every step, as our simulator's rollouts
+  log them, so the same scorer judges landing, reach and success; and beside it LIBERO's own
+  verdict on the row's ask (`sim_success`: its `In`/`On` predicate of what the row asks for, which
+  on a task row is the task's `check_success()`).
+
+LIBERO's fixtures are drawn anew at each reset within their regions, as in LIBERO's benchmark; each
+row reseeds them from its trial's number, so the rows of a trial share the scene and a resumed or
+differently split take gives the same rollouts.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from core import worlds
+from core.exam import Exam
+from core.layout import IMAGE_PREFIX, STATE_KEY, TASK_KEY
+from core.spec import EpisodeSpec
+from core.worlds import libero
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = ROOT / ".venv-libero" / "bin" / "python"  # LIBERO's own environment (make setup)
+SERVER = ROOT / "eval" / "libero_server.py"
+SIMS = ("ours", "libero")  # where an exam's rollouts run: our rebuild of the world, or LIBERO's own simulator
+PRIVILEGED = ("oracle", "position", "named_place")  # read our simulator's state and plans: they stay there
+
+
+class SimUnavailable(ValueError):
+    """The exam, the policy or this machine cannot take `sim=libero`; the message says why."""
+
+
+class SimFailed(RuntimeError):
+    """LIBERO's server stopped: the take stops (finished rollouts are kept, resume continues)."""
+
+
+def _read_frame(stream):  # noqa: ANN001, ANN202
+    from eval.libero_server import read_frame
+
+    return read_frame(stream)
+
+
+def check(exam: Exam, policy: str) -> None:
+    """Refuse, before any rollout, what `sim=libero` cannot take: an exam outside LIBERO's worlds, a
+    privileged reference policy, a machine without LIBERO's environment."""
+    world = exam.meta.get("world", "native")
+    if not worlds.world(world).suite:
+        libero_worlds = ", ".join(w for w in worlds.names() if worlds.world(w).suite)
+        raise SimUnavailable(
+            f"sim=libero runs exams of LIBERO's worlds ({libero_worlds}); this exam is of world {world}: take it without sim="
+        )
+    key = policy.partition(":")[0]
+    if key in PRIVILEGED:
+        raise SimUnavailable(
+            f"policy {key} reads our simulator's state and plans, not observations: it takes exams in our simulator only "
+            f"(leave sim= out); sim=libero takes policies that act on observations ({', '.join(_observing())})"
+        )
+    if not PYTHON.is_file():
+        raise SimUnavailable(f"LIBERO's environment is not installed ({PYTHON} is missing): make setup builds it")
+
+
+def _observing() -> str:
+    from eval.registry import names
+
+    return ", ".join(n for n in names() if n.partition(":")[0] not in PRIVILEGED)
+
+
+@dataclass(frozen=True)
+class Setup:
+    """How one row starts in LIBERO: the environment (`key`, and its BDDL file or text), the initial
+    state (LIBERO's own vector, or a pose from the scene record), and which of LIBERO's bodies and
+    sites are the spec's objects."""
+
+    key: str
+    bddl: dict
+    start: dict
+    state: np.ndarray | None
+    ids: tuple[str, ...]
+    objects: tuple[str, ...]  # LIBERO instance of each of ids[: len(objects)]
+    sites: tuple[str, ...]  # LIBERO site of each of the rest
+
+
+class Rows:
+    """How an exam's rows start in LIBERO, worked out once per exam in the process that runs them."""
+
+    def __init__(self, meta: dict, specs: list[EpisodeSpec]) -> None:
+        self.world = worlds.world(meta["world"])
+        canonical = meta.get("canonical")
+        self.suite = canonical["suite"] if canonical else None
+        # a canonical exam's trials, in order: (task, LIBERO's initial state) (gen/canonical.py)
+        self.cases = [(task, s) for task, states in canonical["states"].items() for s in states] if canonical else []
+        union = {o["instance"]: o["kind"] for spec in specs for o in spec.scene_record()["objects"] if not self._site(o["kind"])}
+        self.union = dict(sorted(union.items()))
+
+    def _site(self, kind: str) -> bool:
+        return self.world.kind(kind).model == "site"
+
+    def _followed(self, spec: EpisodeSpec) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
+        """The spec's object ids, objects first then places on furniture, with LIBERO's instance of
+        each object and LIBERO's site of each place."""
+        if self.suite:  # LIBERO's own problem: the spec's objects are its objects in order (gen/canonical.py)
+            names = list(libero.problem(self.suite, self.cases[spec.index][0]).objects)
+        else:
+            names = [o["instance"] for o in spec.scene_record()["objects"]]
+        placed = [(o.id, name) for o, name in zip(spec.objects, names) if not self._site(o.kind)]
+        sites = [(o.id, self.world.kind(o.kind).params["site"]) for o in spec.objects if self._site(o.kind)]
+        return tuple(i for i, _ in placed + sites), tuple(n for _, n in placed), tuple(n for _, n in sites)
+
+    def setup(self, spec: EpisodeSpec) -> Setup:
+        ids, objects, sites = self._followed(spec)
+        if self.suite:
+            task, state = self.cases[spec.index]
+            bddl = {"bddl": str(libero.benchmark_root() / "bddl_files" / self.suite / f"{task}.bddl")}
+            return Setup(f"{self.suite}/{task}", bddl, {}, libero.initial_states(self.suite, task)[state], ids, objects, sites)
+        record = spec.scene_record()
+        pose = {
+            "arm": record["robot"]["arm"],
+            "fingers": record["robot"]["fingers"],
+            "objects": [{k: o[k] for k in ("instance", "pos", "quat")} for o in record["objects"] if o["instance"] in objects],
+            "fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in record["fixtures"]],
+        }
+        return Setup(f"{self.world.name}/exam", {"bddl_text": self._problem()}, pose, None, ids, objects, sites)
+
+    def _problem(self) -> str:
+        """One BDDL problem for every trial of a generated exam: all its objects, on the world's floor
+        or its suite's table with the fixtures (the goal is a placeholder: rows are judged by their own
+        asks, `predicate`)."""
+        from eval.libero_server import floor_bddl, table_bddl
+
+        first = next(iter(self.union))
+        if self.world.fixtures:
+            return table_bddl(self.world.suite, self.union, f"(On {first} main_table)")
+        containers = [i for i, kind in self.union.items() if self.world.kind(kind).contain is not None]
+        return floor_bddl(self.union, containers, f"(On {first} floor)")
+
+
+def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> list[str] | None:
+    """LIBERO's goal predicate of a row's ask (carry what the program moves to where it goes), or None
+    where LIBERO has no predicate for the program."""
+    params = spec.task.params
+    if "object" in params:
+        moved, destination = params["object"], target
+    elif "destination" in params:
+        moved, destination = target, params["destination"]
+    else:
+        return None
+    where = dict(zip(setup.ids, (*setup.objects, *setup.sites)))
+    kind = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    if kind.contain is not None:
+        return ["In", where[moved], f"{where[destination]}_contain_region"]
+    return ["On", where[moved], where[destination]]
+
+
+class LiberoSim:
+    """LIBERO's simulator for one process's rollouts: its server, the row in progress."""
+
+    name = "libero"
+
+    def __init__(self, meta: dict, specs: list[EpisodeSpec]) -> None:
+        self.rows = Rows(meta, specs)
+        self._log = tempfile.TemporaryFile()
+        self.server = subprocess.Popen(
+            [str(PYTHON), str(SERVER)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._log,
+            start_new_session=True,  # Ctrl-C is for the take; the server ends when its stdin closes
+        )
+        self._key: str | None = None
+        self._now: dict[str, np.ndarray] = {}
+        self.setup: Setup | None = None
+        self.spec: EpisodeSpec | None = None
+
+    def _ask(self, header: dict, arrays: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str, np.ndarray]]:
+        from eval.libero_server import write_frame
+
+        try:
+            write_frame(self.server.stdin, header, arrays)  # type: ignore[arg-type]
+            reply = _read_frame(self.server.stdout)
+        except (BrokenPipeError, EOFError, OSError):
+            reply = None
+        if reply is None:
+            raise SimFailed(f"LIBERO's server stopped ({self._stderr()})")
+        answer, out = reply
+        if not answer.pop("ok"):
+            raise RuntimeError(f"LIBERO's environment: {answer['error']}")
+        return answer, out
+
+    def _stderr(self) -> str:
+        self._log.seek(0)
+        lines = [line for line in self._log.read().decode(errors="replace").splitlines() if line.strip()]
+        return lines[-1] if lines else f"exit code {self.server.poll()}"
+
+    def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None:
+        setup = self.rows.setup(spec)
+        if setup.key != self._key:
+            self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "render": render, **setup.bddl})
+            self._key = setup.key
+        arrays = {"state": setup.state} if setup.state is not None else {}
+        start = {"pose": setup.start} if setup.state is None else {}
+        request = {"op": "reset", "seed": int(row["trial"]), "objects": setup.objects, "sites": setup.sites, **start}
+        _, self._now = self._ask(request, arrays)
+        self.setup, self.spec = setup, spec
+
+    def step(self, action: np.ndarray) -> None:
+        _, self._now = self._ask({"op": "step", "images": False}, {"action": np.asarray(action, np.float64)})
+
+    def ee_pos(self) -> np.ndarray:
+        return self._now["ee"]
+
+    def positions(self) -> dict[str, tuple[float, ...]]:
+        assert self.setup is not None
+        return {i: tuple(float(v) for v in p) for i, p in zip(self.setup.ids, self._now["objects"])}
+
+    def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
+        from oracle.scene import axis_angle
+
+        assert self.spec is not None
+        now = self._now
+        state = np.concatenate([now["ee"], axis_angle(now["hand_quat"]), now["fingers"]]).astype(np.float32)
+        obs: dict = {STATE_KEY: state, TASK_KEY: instruction}
+        if images:
+            size, layout = self.spec.sim.image_size, self.spec.sim.layout
+            frames = {} if occluded else self._ask({"op": "render"})[1]
+            for cam in self.spec.sim.cameras:
+                raw = frames.get(layout.cameras[cam])
+                obs[IMAGE_PREFIX + cam] = np.zeros((size, size, 3), np.uint8) if raw is None else raw[::-1, ::-1].copy()
+        return obs
+
+    def verdict(self, row: pd.Series) -> bool | None:
+        """LIBERO's own predicate of the row's ask, now."""
+        assert self.setup is not None and self.spec is not None
+        ask = predicate(self.spec, self.setup, str(row["target"]), str(row["program"]))
+        if ask is None:
+            return None
+        answer, _ = self._ask({"op": "goal", "predicates": [ask]})
+        return answer["predicates"][0]
+
+    def close(self) -> None:
+        if self.server.poll() is None:
+            self.server.stdin.close()  # type: ignore[union-attr]
+            try:
+                self.server.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.server.kill()
+        self._log.close()
