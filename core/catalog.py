@@ -25,6 +25,7 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 
 
 GRIPPER_SPAN = 0.08  # the Panda's fingers open this far apart: nothing wider across its grasp axis can be picked
+SITE = "site"  # the model of a place on a fixture (core/worlds/libero.py): somewhere things go, nothing to pick up
 RIM_DEPTH = 0.02  # measured from LIBERO-Spatial's 50 first states: 10 mm let the wall slip in 4, 20 mm in none
 
 
@@ -57,6 +58,12 @@ class Kind:
     rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
+
+    @property
+    def is_site(self) -> bool:
+        """A place on a fixture (a stove's burner), which no scene moves: an object of the scene only
+        as somewhere to put things."""
+        return self.model == SITE
 
     @property
     def noun(self) -> str:

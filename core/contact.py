@@ -1,5 +1,6 @@
 """Where the hand meets an object: the points the oracle's skills go to and the exam scorer
-measures a rollout's closest approach against, so the two cannot drift apart.
+measures a rollout's closest approach against (a bowl's whole rim, any side of which the oracle
+may take), so the two cannot drift apart.
 
 Positions are body origins (x, y, z), one or a batch (..., 3); kinds come from the catalog.
 """
@@ -27,6 +28,17 @@ def grip_height(kind: Kind) -> float:
 def grasp_point(kind: Kind, pos: np.ndarray) -> np.ndarray:
     """Where the grip site closes on an object to pick it up (or pushes against from above)."""
     return top(kind, pos) - [0.0, 0.0, kind.grasp_depth()]
+
+
+def grasp_distance(kind: Kind, pos: np.ndarray, ee: np.ndarray) -> np.ndarray:
+    """How far the grip site `ee` is from where the object can be held: its grasp point, or for a
+    bowl (a `rim` kind, taken by its wall wherever a side is clear) the ring of its wall at the
+    grasp depth. Per step of (T, 3) `ee` and object `pos`; what landing is judged by."""
+    ee, point = np.asarray(ee, dtype=float), grasp_point(kind, pos)
+    if not kind.rim:
+        return np.linalg.norm(ee - point, axis=-1)
+    across = np.linalg.norm(ee[..., :2] - point[..., :2], axis=-1) - kind.rim
+    return np.hypot(across, ee[..., 2] - point[..., 2])
 
 
 def release_point(destination: Kind, pos: np.ndarray, carried: Kind) -> np.ndarray:

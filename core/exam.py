@@ -90,9 +90,13 @@ def scoring() -> dict[str, Any]:
         "landing_threshold": LANDING,
         "reach_thresholds": list(REACH_THRESHOLDS),
         "grazing_band": list(REACH_THRESHOLDS),
-        "contact_point": "pick/push: the object's grasp point (top centre minus grasp_depth); place: the destination's "
-        "top centre raised by the carried object's height minus its grasp_depth, plus "
+        "contact_point": "pick/push: the object's grasp point (top centre minus grasp_depth), for a kind with a `rim` "
+        "(a bowl, taken by its wall) the ring of that radius around it at the grasp point's height; place: the "
+        "destination's top centre raised by the carried object's height minus its grasp_depth, plus "
         f"{contact.PLACE_CLEARANCE} m release clearance",
+        "landable": "a rollout lands on the row's alternatives or on any other object of the scene the program could act "
+        "on (not a place on furniture, not what the program carries things into; a `place` program lands on its "
+        "alternatives only); chance is one over them",
     }
 
 
@@ -101,6 +105,8 @@ def geometry(world: str = "native") -> dict[str, dict[str, Any]]:
     out = {}
     for k in worlds.world(world).kinds.values():
         out[k.name] = {"size": list(k.size), "bottom": k.bottom, "grasp_depth": k.grasp_depth(), "inner": k.inner}
+        if k.rim:
+            out[k.name]["rim"] = k.rim
         if k.contain is not None:
             out[k.name]["contain"] = {"offset": list(k.contain[0]), "half_size": list(k.contain[1])}
         if k.quat != (1.0, 0.0, 0.0, 0.0):

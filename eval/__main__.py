@@ -3,8 +3,8 @@
 python -m eval policy=oracle exam=datasets/object-exam workers=2
 
 Runs the exam's rollouts in our simulator (or, with sim=libero, in LIBERO's own: eval/libero_sim.py)
-with the policy (oracle, position, nothing, random,
-remote:HOST:PORT, ckpt:PATH or any other registered one: eval/registry.py), logs them to
+with the policy (oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH,
+ckpt:PATH or any other registered one: eval/registry.py), logs them to
 `rollouts.parquet`, scores the logs with eval/score.py and writes report.json, report.md and
 report.html to `out` (eval/battery.py). Every finished rollout is kept as it ends: an interrupted
 take continues with resume=true.
@@ -27,7 +27,7 @@ from gen.cli import Failed, UserError, main
 
 @dataclass
 class EvalOptions:
-    policy: str  # oracle, position, nothing, random, remote:HOST:PORT, ckpt:PATH (eval/registry.py)
+    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/registry.py)
     exam: str  # the exam folder (python -m gen ... split=exam)
     out: str | None = None  # report folder; default runs/<exam folder>-<exam digest>/<policy>
     overwrite: bool = False  # replace the report at `out`, and discard an interrupted take's rollouts
@@ -44,15 +44,10 @@ def check_out(out: Path, overwrite: bool) -> None:
     """Before the policy loads and any rollout runs: `out` must be a folder that can be written
     (as must its parent, where the rollouts are kept), and hold no report unless `overwrite`."""
     from eval.battery import REPORT_FILES
-    from gen.config import check_writable, listed
+    from eval.report import check_out as check_report_out
+    from gen.config import check_writable
 
-    if out.exists() and not out.is_dir():
-        raise UserError(f"out={out} exists and is not a folder")
-    if not overwrite and (found := [name for name in REPORT_FILES if (out / name).exists()]):
-        raise UserError(
-            f"out={out} already holds a report ({listed(found)}); pass overwrite=true to replace it, or choose another out"
-        )
-    check_writable(out)
+    check_report_out(out, overwrite, REPORT_FILES)
     check_writable(out, inside=True)
 
 

@@ -31,14 +31,14 @@ from core.exam import Exam
 from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
 from eval.policies import Policy
 from eval.registry import make
-from eval.report import write_reports
+from eval.report import REPORTS, write_reports
 from eval.rollout import OurSim, Runner, make_sim, run_chunk
-from eval.score import POLICY_KEY, SIM_KEY, read_logs, score
+from eval.score import BASELINE_MEASURED, POLICY_KEY, SIM_KEY, read_logs, score
 from gen.partial import Partial
 from gen.workers import die_with
 
 ROLLOUTS = "rollouts.parquet"
-REPORT_FILES = ("report.json", "report.md", "report.html", ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
+REPORT_FILES = (*REPORTS, ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
 
 
 def _worker(parent: int) -> None:
@@ -47,13 +47,22 @@ def _worker(parent: int) -> None:
     die_with(parent)
 
 
-def shortcut_baseline(exam: Exam, rows: pd.DataFrame, workers: int = 1) -> dict:
-    """The `position` policy's faces on `rows` of the exam: measured once, then cached."""
+class BaselineInterrupted(KeyboardInterrupt):
+    """Ctrl-C while the shortcut baseline was measured; the message says what its take kept."""
+
+
+def shortcut_baseline(exam: Exam, rows: pd.DataFrame, workers: int = 1, keep: Path | None = None) -> dict:
+    """The `position` policy's faces on `rows` of the exam: measured once, then cached. Its rollouts
+    are kept in `keep` as they finish (a take's partial run, so an interrupted take resumes them too)."""
     known = cached_baseline(exam, list(rows["row"]))
     if known is not None:
         return known
     with tempfile.TemporaryDirectory() as tmp:
-        report, _ = take(exam, rows, make(SHORTCUT), Path(tmp) / SHORTCUT, workers, SHORTCUT, baseline=False)
+        out = (keep or Path(tmp)) / SHORTCUT
+        try:
+            report, _ = take(exam, rows, make(SHORTCUT), out, workers, SHORTCUT, baseline=False, resume=True, discard=False)
+        except KeyboardInterrupt as exc:
+            raise BaselineInterrupted(str(exc)) from None
     store_baseline(exam, list(rows["row"]), report["faces"])
     return report["faces"]
 
@@ -98,11 +107,16 @@ def take(
             _run(exam, rows[~rows["row"].isin(partial.saved())], policy, partial, workers, policy_name, policy_options, sim)
             seconds = time.perf_counter() - start
             logs = [partial.load(i) for i in ids]
-            report = _report(exam, rows, policy, logs, partial.root / "report", workers, baseline, sim)
-        except KeyboardInterrupt:
+            report = _report(exam, rows, policy, logs, partial.root, workers, baseline, sim)
+        except KeyboardInterrupt as exc:
             kept = len(partial.saved() & set(ids))
+            during = (
+                f" (while the `{SHORTCUT}` baseline was measured: {str(exc).removeprefix('interrupted: ').split(';')[0]})"
+                if isinstance(exc, BaselineInterrupted)
+                else ""
+            )
             raise KeyboardInterrupt(
-                f"interrupted: {kept} of {len(ids)} rollouts kept in {partial.root}; rerun with resume=true to continue"
+                f"interrupted: {kept} of {len(ids)} rollouts kept in {partial.root}{during}; rerun with resume=true to continue"
             ) from None
         out.mkdir(parents=True, exist_ok=True)
         for name in REPORT_FILES:  # each file replaced in one rename; anything else in `out` stays
@@ -139,10 +153,12 @@ def _run(
 
 
 def _report(
-    exam: Exam, rows: pd.DataFrame, policy: Policy, logs: list[dict], staged: Path, workers: int, baseline: bool, sim: str
+    exam: Exam, rows: pd.DataFrame, policy: Policy, logs: list[dict], kept: Path, workers: int, baseline: bool, sim: str
 ) -> dict:
     """Score `logs` from the written rollouts.parquet, as the offline scorer would, and write every
-    report file to `staged`."""
+    report file to `kept`/report (the shortcut baseline's rollouts, when it is measured now, are kept
+    in `kept`/baseline)."""
+    staged = kept / "report"
     staged.mkdir(parents=True, exist_ok=True)
     table = pa.Table.from_pylist(logs)
     pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode(), SIM_KEY: sim.encode()}), staged / ROLLOUTS)
@@ -152,6 +168,8 @@ def _report(
         store_baseline(exam, list(rows["row"]), report["faces"])
         report["baseline"] = report["faces"]
     elif baseline:
-        report["baseline"] = shortcut_baseline(exam, rows, workers)
+        report["baseline"] = shortcut_baseline(exam, rows, workers, kept / "baseline")
+    if baseline:
+        report["baseline_source"] = BASELINE_MEASURED
     write_reports(staged, report)
     return report

@@ -8,15 +8,16 @@ The protocol is frames on stdin/stdout (`read_frame`/`write_frame`): a JSON head
 of the numpy arrays it lists, so the two sides' numpy versions (1.x here and 2.x there) never
 exchange pickles. LIBERO's own prints go to stderr. Requests:
 
-* `open` {key, bddl | bddl_text, size, render}: make (or reuse, by `key`) the environment of a BDDL
-  problem, LIBERO's `OffScreenRenderEnv` with its renderer when `render` (frames of `size` px are
-  then drawn with LIBERO's settings by `sim.render`, what its camera observations call), and soft
-  resets (the compiled model kept: LIBERO's hard reset would rebuild it and its renderer, seconds each).
+* `open` {key, bddl | bddl_text, size, cameras}: make (or reuse, by `key`) the environment of a BDDL
+  problem, LIBERO's `OffScreenRenderEnv`, with its renderer when `cameras` are named (frames of
+  `size` px are then drawn with LIBERO's settings by `sim.render`, what its camera observations
+  call), and soft resets (the compiled model kept: LIBERO's hard reset would rebuild it and its
+  renderer, seconds each).
 * `reset` {seed, state | pose, objects, sites}: `np.random` seeded (LIBERO draws its fixtures' poses
   at reset), `reset()`, then LIBERO's own initial-state vector (`set_init_state`) or a pose from a
   scene record (`pose_from_record`); `objects` and `sites` name what the log follows.
 * `step` {action}: one `env.step` (a control step of OSC_POSE at 20 Hz).
-* `render`: both cameras' frames, LIBERO's raw ones (upside down, as its renderer gives them).
+* `render`: the cameras' frames, LIBERO's raw ones (upside down, as its renderer gives them).
 * `goal` {predicates}: LIBERO's own predicates (`_eval_predicate`) now, and `check_success()`.
 Every `reset` and `step` answers with what is needed to log and observe the rollout: the grip
 site's position, the hand's quaternion (wxyz), the finger joints, each followed object's and
@@ -33,7 +34,6 @@ from typing import IO, Any
 
 import numpy as np
 
-CAMERAS = ("agentview", "robot0_eye_in_hand")
 # LIBERO-Object's placement regions (its BDDL files' ranges), and the basket's bin
 REGIONS = {
     "target_object_region": (-0.145, -0.265, -0.095, -0.215),
@@ -214,6 +214,7 @@ class Server:
         self.envs: dict[str, Any] = {}
         self.env: Any = None
         self.size = 0
+        self.cameras: list[str] = []
         self.follow: tuple[list[str], list[str]] = ([], [])
 
     def open(self, request: dict, arrays: dict) -> tuple[dict, dict]:
@@ -228,8 +229,8 @@ class Server:
                 with tempfile.NamedTemporaryFile("w", suffix=".bddl", delete=False) as f:
                     f.write(request["bddl_text"])
                 bddl = f.name
-            self.envs[key] = make_env(bddl, request["size"], request["render"], camera_obs=False, hard_reset=False)
-        self.env, self.size = self.envs[key], request["size"]
+            self.envs[key] = make_env(bddl, request["size"], bool(request["cameras"]), camera_obs=False, hard_reset=False)
+        self.env, self.size, self.cameras = self.envs[key], request["size"], request["cameras"]
         env = self.env.env
         sites = sorted(env.object_sites_dict) if hasattr(env, "object_sites_dict") else []
         return {"objects": list(env.objects_dict), "fixtures": list(env.fixtures_dict), "sites": sites}, {}
@@ -249,9 +250,9 @@ class Server:
         return self._now()
 
     def render(self, request: dict, arrays: dict) -> tuple[dict, dict]:
-        """Both cameras' frames now, drawn as LIBERO's camera observations draw them."""
+        """The cameras' frames now, drawn as LIBERO's camera observations draw them."""
         sim = self.env.sim
-        return {}, {cam: sim.render(camera_name=cam, width=self.size, height=self.size) for cam in CAMERAS}
+        return {}, {cam: sim.render(camera_name=cam, width=self.size, height=self.size) for cam in self.cameras}
 
     def goal(self, request: dict, arrays: dict) -> tuple[dict, dict]:
         env = self.env.env

@@ -114,7 +114,7 @@ class Rows:
         self.union = dict(sorted(union.items()))
 
     def _site(self, kind: str) -> bool:
-        return self.world.kind(kind).model == "site"
+        return self.world.kind(kind).is_site
 
     def _followed(self, spec: EpisodeSpec) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
         """The spec's object ids, objects first then places on furniture, with LIBERO's instance of
@@ -215,7 +215,8 @@ class LiberoSim:
     def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None:
         setup = self.rows.setup(spec)
         if setup.key != self._key:
-            self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "render": render, **setup.bddl})
+            cameras = [spec.sim.layout.cameras[c] for c in spec.sim.cameras] if render else []
+            self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "cameras": cameras, **setup.bddl})
             self._key = setup.key
         arrays = {"state": setup.state} if setup.state is not None else {}
         start = {"pose": setup.start} if setup.state is None else {}

@@ -21,6 +21,13 @@ FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nons
 LEVELS = ("5cm", "2cm", "achieved")
 
 
+SIMULATORS = {
+    "ours": "ours (the exam's world rebuilt in MuJoCo 3.9 with robosuite 1.5's models)",
+    "libero": "LIBERO's own (OffScreenRenderEnv, robosuite 1.4; sim=libero): rows judged by our scorer from its "
+    "logged positions, and by LIBERO's own predicates (`by the simulator's own check`)",
+}
+
+
 def _pct(r: dict) -> str:
     return f"{r['rate']:.1%} ({r['k']}/{r['n']}, CI {r['ci'][0]:.1%}–{r['ci'][1]:.1%})" if r["n"] else "— (n=0)"
 
@@ -46,6 +53,9 @@ def markdown(report: dict) -> str:
             else f"**Init-value check FAILED** ({report['init_value']['faces']}): do not trust these rates."
         ),
         "",
+        f"Simulator: {SIMULATORS.get(report.get('simulator', ''), report.get('simulator', 'not recorded'))}. "
+        f"Shortcut column: {report.get('baseline_source', 'not recorded')}.",
+        "",
         "| face | rate (k/n, 95% Wilson CI) | 95% CI, trials resampled | chance | shortcut (`position`) |",
         "|---|---|---|---|---|",
     ]
@@ -55,6 +65,8 @@ def markdown(report: dict) -> str:
         for f in FACE_ORDER
         if f in faces
     ]
+    for face, judged in report.get("sim_success", {}).items():
+        lines.append(f"| {face}, by the simulator's own check | {_pct(judged)} | {_trials_ci(judged)} | — | — |")
     if "grounding" in report:
         g = report["grounding"]
         lines.append(
@@ -175,6 +187,25 @@ def html(report: dict) -> str:
         f"<!doctype html><html><head><meta charset='utf-8'><title>battery report</title><style>{STYLE}</style></head>"
         f"<body>{head}</table>{body}{rest}</body></html>"
     )
+
+
+REPORTS = ("report.json", "report.md", "report.html")  # what write_reports writes, all it ever replaces
+
+
+def check_out(out: Path, overwrite: bool, files: tuple[str, ...] = REPORTS) -> None:
+    """Before any work: `out` must be a folder that can be written and hold none of `files` (a
+    report) unless `overwrite`, which replaces exactly them: one rule for `python -m eval` and
+    `python -m eval.score`."""
+    from gen.cli import UserError
+    from gen.config import check_writable, listed
+
+    if out.exists() and not out.is_dir():
+        raise UserError(f"out={out} exists and is not a folder")
+    if not overwrite and (found := [name for name in files if (out / name).exists()]):
+        raise UserError(
+            f"out={out} already holds a report ({listed(found)}); pass overwrite=true to replace it, or choose another out"
+        )
+    check_writable(out)
 
 
 def write_reports(out: Path, report: dict) -> None:

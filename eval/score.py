@@ -25,7 +25,8 @@ report.json schema (version 2):
       face counts (the ask; for true_target the original). The headline is the 5 cm level for
       obeyed_name and true_target and the achieved level for the others.
   baseline = the faces of the `position` reference policy (the measured shortcut) on the same
-      exam, when known (python -m eval runs it once per exam and caches it)
+      exam, when known (python -m eval runs it once per exam and caches it); baseline_source says
+      where it came from, or how to measure it where it is missing
   grounding = {k, n, rate, ci, ci_trials, chance} for policies that predict where the named
       object is (a `located` column in the logs): swap rollouts whose first-frame prediction is
       nearest the newly named object, whatever the arm then did
@@ -70,6 +71,7 @@ from gen.cli import UserError, main
 LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}
 HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 POLICY_KEY, SIM_KEY = b"deconfound.policy", b"deconfound.sim"  # rollouts.parquet's metadata: who acted, and where
+BASELINE_MEASURED = f"`{SHORTCUT}` on the same rows, in our simulator (python -m eval measures it once per exam and caches it)"
 SIM_SUCCESS = "sim_success"  # rollouts.parquet's column of a simulator's own verdict (eval/rollout.py)
 
 
@@ -77,18 +79,20 @@ class LogError(ValueError):
     """Rollout logs that do not match the exam; the message says how."""
 
 
-def contact_points(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
-    """(T, 3) positions the end effector reaches for when it does `program` to `target`: the
-    points the oracle's skills go to (core/contact.py)."""
+def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str, ee: np.ndarray) -> np.ndarray:
+    """(T,) distances of the end effector from where it reaches when it does `program` to `target`:
+    the object's grasp point (a bowl's: its rim) or the release point over a destination, the
+    places the oracle's skills go to (core/contact.py)."""
     kind = worlds.kind(spec.object(target).kind, spec.sim.world)
     if program == "place":
         carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world)
-        return contact.release_point(kind, objects[target], carried)
-    return contact.grasp_point(kind, objects[target])
+        return np.linalg.norm(ee - contact.release_point(kind, objects[target], carried), axis=-1)
+    return contact.grasp_distance(kind, objects[target], ee)
 
 
 def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], steps: int | None = None) -> dict:
-    """What one rollout did, judged up to `steps` (default: all of it)."""
+    """What one rollout did to each thing it could have done, judged up to `steps` (default: all
+    of it): the row's alternatives and every other object the hand can land on (`landable`)."""
     spec = EpisodeSpec.from_json(row["spec"])
     end = len(ee) - 1 if steps is None else steps
     outcome = Outcome(
@@ -96,13 +100,23 @@ def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndar
     )
     alternatives = [(a["target"], a["program"]) for a in json.loads(row["alternatives"])]
     result = {}
-    for alt in alternatives:
-        points = contact_points(spec, objects, *alt)[: end + 1]
-        result[alt] = {
-            "achieved": achieved(spec, outcome, *alt),
-            "distance": float(np.min(np.linalg.norm(ee[: end + 1] - points, axis=1))),
-        }
+    for alt in alternatives + landable(spec, alternatives):
+        distances = contact_distance(spec, {k: v[: end + 1] for k, v in objects.items()}, *alt, ee[: end + 1])
+        result[alt] = {"achieved": achieved(spec, outcome, *alt), "distance": float(np.min(distances))}
     return result
+
+
+def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tuple[str, str]]:
+    """The other objects of the scene a hand can land on when the program acts on the named object
+    (not where a `place` carries it): every object but places on furniture, what the program
+    carries something into, and the alternatives'. A landing there is a distractor's, and chance
+    is one over the alternatives and these together."""
+    program = alternatives[0][1]
+    if program == "place":
+        return []
+    params, named = spec.task.params, {target for target, _ in alternatives}
+    kept = {params.get("destination"), params.get("object"), *named}
+    return [(o.id, program) for o in spec.objects if o.id not in kept and not worlds.kind(o.kind, spec.sim.world).is_site]
 
 
 def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
@@ -409,14 +423,14 @@ class ScoreOptions:
     logs: str  # the rollout logs (rollouts.parquet; columns in eval/rollout.py)
     out: str | None = None  # report folder; default the logs' folder
     policy: str | None = None  # the policy's label in the report; default the one in the logs, else unknown
+    overwrite: bool = False  # replace the report already in `out` (report.json, report.md, report.html; nothing else)
 
 
 def run(options: ScoreOptions) -> None:
-    from eval.report import write_reports
+    from eval.report import check_out, write_reports
 
     out = Path(options.out or Path(options.logs).parent)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"out={out} is a file; out names the folder that gets report.json, report.md and report.html")
+    check_out(out, options.overwrite)
     try:
         exam = read(options.exam)
         logs, logged_policy = read_logs(Path(options.logs))
@@ -426,6 +440,12 @@ def run(options: ScoreOptions) -> None:
     baseline = report["faces"] if report["policy"] == SHORTCUT else cached_baseline(exam, list(exam.trials["row"]))
     if baseline is not None:
         report["baseline"] = baseline
+        report["baseline_source"] = BASELINE_MEASURED
+    else:
+        report["baseline_source"] = (
+            f"none: no `{SHORTCUT}` run of these rows is cached; python -m eval policy={SHORTCUT} exam={options.exam} "
+            "measures it, and scoring finds it then"
+        )
     try:
         write_reports(out, report)
     except OSError as exc:  # e.g. a file where a folder of the path should be, or no permission

@@ -37,7 +37,7 @@ PICTURE = "suites.png"
 
 @dataclass
 class SuitesOptions:
-    policy: str  # oracle, position, nothing, random, remote:HOST:PORT, ckpt:PATH (eval/registry.py)
+    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/registry.py)
     suites: list[str] = field(default_factory=lambda: ["all"])  # suite names, or [all]: every covered suite of `world`
     world: str = "libero_object"  # the LIBERO world whose suites `all` means
     states: int = 5  # LIBERO's initial states per task in each exam (drawn with seed)

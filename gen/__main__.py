@@ -18,7 +18,7 @@ def generate(cfg: GenConfig) -> None:
     try:
         summary = generate(cfg)
     except KeyboardInterrupt:
-        raise KeyboardInterrupt("interrupted; nothing was written to out") from None
+        raise KeyboardInterrupt(_kept(cfg)) from None
     print(summary)
     if cfg.push_to_hub:
         from gen.push import PushError, push
@@ -28,6 +28,22 @@ def generate(cfg: GenConfig) -> None:
         except PushError as exc:
             raise Failed(str(exc)) from None
         print(f"pushed {len(pushed.files)} files to {pushed.url} (tag {pushed.tag})")
+
+
+def _kept(cfg: GenConfig) -> str:
+    """What an interrupted run leaves: the finished episodes its partial run keeps (gen/partial.py)."""
+    from pathlib import Path
+
+    from gen.partial import Partial
+
+    partial = Partial(Path(cfg.out or ""))
+    kept = len(partial.saved()) if partial.items.is_dir() else 0
+    if not kept:
+        return "interrupted before any episode was finished; nothing was written to out"
+    return (
+        f"interrupted: {kept} of {cfg.n} episodes kept in {partial.root}, nothing written to out yet; "
+        "rerun the same command with resume=true to continue"
+    )
 
 
 if __name__ == "__main__":

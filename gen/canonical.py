@@ -28,6 +28,7 @@ settle.
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from collections import Counter
@@ -40,13 +41,14 @@ import numpy as np
 import referents
 from core import exam, worlds
 from core.layout import STATE_KEY, TASK_KEY, layout
-from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, yaw_of
+from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings, yaw_of
 from core.worlds import libero
 from gen.audit import audit
 from gen.cli import UserError, main
 from gen.config import check_output, check_seed
 from gen.partial import staging
 from referents import Referent
+from referents.design import Design
 
 if TYPE_CHECKING:
     from oracle.scene import Scene
@@ -97,6 +99,41 @@ class Suite:
         theirs = libero.problem(self.world.suite, libero.base_task(self.name, task)).language
         return ours if ours and _words(ours) != _words(theirs) else base
 
+    def swaps(self, task: str, design: Design, delivered: str) -> tuple[tuple[Counterfactual, ...], dict[str, str]]:
+        """The swaps of a task row that says `delivered`: each the delivered instruction with the words
+        naming the target changed to another's, the suite's wording kept (where it is LIBERO's own,
+        the design's swaps as they are); and those left out, each with why (swap target -> reason):
+        where the wording does not say the target's words, and in a suite that names another target
+        than its base task (`_task`), the swap back to the base task's own target, which LIBERO's
+        layout alone leads a policy to that ignores the words."""
+        if delivered == design.instruction:
+            return design.counterfactuals, {}
+        base = libero.problem(self.world.suite, libero.base_task(self.name, task))
+        base_target = base.objects.get(base.goal[0][1]) if base.goal and len(base.goal[0]) > 1 else None
+        kept, left = [], {}
+        for cf in design.counterfactuals:
+            old, new = cf.changed
+            found = re.search(_loosely(old), delivered, re.IGNORECASE)
+            if found is None:
+                left[cf.target] = f"the suite's instruction ({delivered!r}) does not say {old!r}, so no word of it names another"
+            elif cf.target == base_target and cf.target != design.target:
+                left[cf.target] = f"it names the base task's own {new}, which LIBERO's layout leads to whatever the words"
+            else:
+                kept.append(replace(cf, instruction=delivered[: found.start()] + new + delivered[found.end() :]))
+        return tuple(kept), left
+
+
+ARTICLES = ("the", "a", "an")
+
+
+def _loosely(phrase: str) -> str:
+    """A pattern of `phrase`'s words that lets a paraphrase drop or add its articles ("between the
+    plate and ramekin" says "between the plate and the ramekin")."""
+    words = [w for w in phrase.split() if w.lower() not in ARTICLES]
+    article = rf"(?:(?:{'|'.join(ARTICLES)})\s+)?"
+    leading = article if phrase.split()[0].lower() in ARTICLES else ""
+    return r"\b" + leading + rf"\s+{article}".join(map(re.escape, words)) + r"\b"
+
 
 def _words(text: str) -> list[str]:
     return text.lower().replace(".", " ").split()
@@ -142,7 +179,7 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
         return f"our skills cannot do it ({problem.goal[0][0]} {' '.join(problem.goal[0][1:])}: see the README's coverage)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
-    if carried_kind.model != "site" and not carried_kind.graspable():
+    if not carried_kind.is_site and not carried_kind.graspable():
         return f"its {carried_kind.name} is wider than the Panda's fingers open"
     if not len(libero.initial_states(suite, task)):
         return "its initial-state file is empty"
@@ -239,15 +276,16 @@ def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings)
         objects.append(
             SceneObject(p.id, p.candidate.kind, p.candidate.name, p.slot, (x, y, z), attributes=dict(p.candidate.attributes))
         )
+    delivered = suite.instruction(task, libero.language(libero.base_task(suite.name, task)))
     return EpisodeSpec(
         referent=referent.name,
         index=index,
         seed=seed,
         objects=tuple(objects),
         target=design.target,
-        instruction=suite.instruction(task, libero.language(libero.base_task(suite.name, task))),
+        instruction=delivered,
         template=design.template,
-        counterfactuals=design.counterfactuals,
+        counterfactuals=suite.swaps(task, design, delivered)[0],
         assets=suite.inventory(),
         task=design.task or referent.config.task,
         sim=sim,
@@ -329,13 +367,19 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSetti
     tasks = {}
     for task in suite.tasks:
         problem, base = suite.problem(task), libero.base_task(suite.name, task)
+        delivered = suite.instruction(task, libero.language(base))
+        design = referent.code.canonical(referent.config, problem)
+        assert design is not None  # a covered task
         tasks[task] = {
             "bddl": f"bddl_files/{suite.name}/{task}.bddl",
             "language_line": problem.language,
             "file_name_instruction": libero.language(task),
-            "instruction": suite.instruction(task, libero.language(base)),
+            "instruction": delivered,
             "base_task": base,
         }
+        left = suite.swaps(task, design, delivered)[1]
+        if left:
+            tasks[task]["left_out_swaps"] = left
     return {
         "referent": referent.name,
         "seed": options.seed,

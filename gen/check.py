@@ -2,9 +2,10 @@
 
 Checks, in order, and stops at the first problem (exit code 1, one line naming it):
 completion marker and format; episode counts across info.json, the episodes table and the scene
-records; frame index continuity and each episode's frame range; timestamps; every video file's
-frame count and each episode's span inside it; stats recomputed from the data; scene records
-against tasks. An exam or a plan (`plan_only=true`) is not a dataset: it is refused with one
+records; frame index continuity and each episode's frame range; timestamps; every frame of every
+video file decoded (a file that stops decoding is named with the frame, and the episode it
+belongs to) at the recorded frame size, and each episode's span inside it; stats recomputed from
+the data; scene records against tasks. An exam or a plan (`plan_only=true`) is not a dataset: it is refused with one
 line saying what it is and what checks it.
 """
 
@@ -22,7 +23,7 @@ from core.layout import ACTION_KEY, STATE_KEY
 from gen import scenes
 from gen.cli import Failed, UserError, main
 from gen.config import product_in
-from gen.lerobot_reader import INFO_PATH, LeRobotReader, frame_count
+from gen.lerobot_reader import INFO_PATH, LeRobotReader
 from gen.stats import vector_stats
 
 
@@ -72,21 +73,16 @@ def check(root: Path) -> dict:
             f"episode {ep.episode_index}: timestamps are not frame_index / fps",
         )
     for key, camera in zip(dataset.video_keys, dataset.cameras):
-        files: dict[Path, float] = {}
+        files: dict[Path, dict[int, tuple[int, int]]] = {}  # file -> its frame -> (episode, the episode's frame)
         for s in dataset.spans(camera):
             span = (s.to_timestamp - s.from_timestamp) * fps
             _require(abs(span - s.length) < 1e-3, f"{key}: episode {s.episode} spans {span:.1f} frames, not {s.length}")
-            files[s.path] = max(files.get(s.path, 0.0), s.to_timestamp)
-        for path, end_s in files.items():
+            files.setdefault(s.path, {}).update({s.first + k: (s.episode, k) for k in range(s.length)})
+        for path, owners in files.items():
             _require(path.is_file(), f"{key}: missing video {path.relative_to(root)}")
-            try:
-                count = frame_count(path)
-            except (av.error.FFmpegError, OSError) as exc:
-                raise Broken(f"{key}: {path.relative_to(root)} cannot be read ({exc})") from None
-            _require(
-                count >= round(end_s * fps),
-                f"{key}: {path.relative_to(root)} has {count} frames, episodes need {round(end_s * fps)}",
-            )
+            count = _decoded(path, tuple(info["features"][key]["shape"][:2]), owners, f"{key}: {path.relative_to(root)}")
+            needed = max(owners) + 1
+            _require(count >= needed, f"{key}: {path.relative_to(root)} has {count} frames, episodes need {needed}")
     stats = dataset.stats
     for key in (STATE_KEY, ACTION_KEY):
         values = np.stack(data[key].to_numpy())
@@ -107,6 +103,22 @@ def check(root: Path) -> dict:
             f"episode {rec.episode_index}: its task is not the instruction in meta/scenes.parquet",
         )
     return info
+
+
+def _decoded(path: Path, shape: tuple[int, int], owners: dict[int, tuple[int, int]], name: str) -> int:
+    """Decode every frame of a video file (as a loader would, which stops at the first frame it
+    cannot decode); returns how many there are, or raises Broken naming the frame that fails."""
+    n = 0
+    try:
+        with av.open(str(path)) as container:
+            for frame in container.decode(container.streams.video[0]):
+                _require((frame.height, frame.width) == shape, f"{name}: frame {n} is {frame.height}x{frame.width}, not {shape}")
+                n += 1
+    except (av.error.FFmpegError, OSError) as exc:
+        episode, k = owners.get(n, (None, None))
+        where = f" (episode {episode}'s frame {k})" if episode is not None else ""
+        raise Broken(f"{name}: frame {n}{where} cannot be decoded ({exc})") from None
+    return n
 
 
 @dataclass

@@ -21,6 +21,7 @@ import dataclasses
 import inspect
 import re
 import sys
+import typing
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -51,6 +52,7 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
         if "=" in arg and key in seen:
             raise UserError(f"option {key!r} is given twice ({seen[key]} and {arg}); give it once")
         seen[key] = arg
+    argv = [_listed(arg, _list_options(schema)) for arg in argv]
     ConfigStore.instance().store(name=name, node=schema)
     try:
         with initialize(version_base=None, config_path=None):
@@ -58,6 +60,25 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
         return OmegaConf.to_object(cfg)  # type: ignore[return-value]
     except (HydraException, OmegaConfBaseException, ValueError, TypeError) as exc:
         raise UserError(_one_line(exc, schema)) from None
+
+
+def _list_options(schema: type) -> set[str]:
+    """The options typed as lists (`List[str]`, `list[str] | None`, ...)."""
+    hints = typing.get_type_hints(schema)
+    return {
+        name
+        for name, hint in hints.items()
+        if any(typing.get_origin(t) is list or t is list for t in (hint, *typing.get_args(hint)))
+    }
+
+
+def _listed(arg: str, lists: set[str]) -> str:
+    """A list option given a bare value (`holdout=red`, `suites=all`, `holdout=red,blue`) as the list
+    it means (`holdout=[red]`); `key=null` and bracketed lists as they are."""
+    key, sep, value = arg.partition("=")
+    if not sep or key not in lists or not value or value.startswith("[") or value == "null":
+        return arg
+    return f"{key}=[{value}]"
 
 
 def _one_line(exc: BaseException, schema: type) -> str:

@@ -30,7 +30,9 @@ from referents.schema import ReferentSpecError
 
 DATASET_ENTRIES = {"meta", "data", "videos", "README.md", "preview.png", "images"}  # a dataset folder's own names
 EXAM_ENTRIES = {"exam.json", TRIALS_FILE, ANSWERS_FILE, "README.md"}  # an exam folder's own names
-PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": EXAM_ENTRIES}
+EXPORT_ENTRIES = {"meta", "data", "videos"}  # a v2.1 export's own names (gen/export.py)
+PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": EXAM_ENTRIES, "export": EXPORT_ENTRIES}
+PRODUCTS = ("dataset", "plan", "exam", "export")  # what this project writes and `overwrite=true` may replace
 
 
 @dataclass
@@ -38,7 +40,7 @@ class GenConfig:
     referent: Any = "object"  # a referent type (referents/<type>.yaml), or a list that shares one dataset ([type@world,...])
     n: int = 20  # episodes
     seed: int = 0  # non-negative; the same seed and options give byte-identical output
-    out: Optional[str] = None  # output folder; default datasets/<referent> (split=exam: datasets/<referent>-exam)
+    out: Optional[str] = None  # default datasets/<referent>, or datasets/<referent>-<world> in another world (exam: ...-exam)
     overwrite: bool = False  # replace a non-empty `out`
     resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
     image_size: Optional[int] = None  # square camera frames, pixels; default: the profile's (native 128, libero 256)
@@ -90,7 +92,13 @@ def parse(argv: list[str]) -> GenConfig:
     return config
 
 
+RESTRICTING = ("holdout", "distractor_only", "targets")  # list options that restrict what a plan may do
+
+
 def validate(cfg: GenConfig) -> None:
+    for name in RESTRICTING:
+        if getattr(cfg, name) == []:
+            raise UserError(f"{name}=[] names no value; leave {name} out, or name the values ({name}=[a,b])")
     if not isinstance(cfg.referent, str):
         _validate_mix(cfg)
         return
@@ -164,9 +172,11 @@ def _validate_mix(cfg: GenConfig) -> None:
     if cfg.n <= 0:
         raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
     mix.check_share(cfg.n, names)
-    if cfg.out is None:
-        cfg.out = str(Path("datasets") / mix.name(names))
     shares = cfg.shares()
+    if cfg.out is None:  # named as the progress bar names the types (`object@libero_object` is libero_object)
+        own = [s.world in (None, referents.world_of(s.referent)) for s in shares]
+        cfg.out = str(Path("datasets") / mix.name([s.referent if o else f"{s.referent}@{s.world}" for s, o in zip(shares, own)]))
+        shares = cfg.shares()
     for item, share in zip(names, shares):
         try:
             validate(share)
@@ -290,23 +300,25 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
     it (referents.worlds_of); its files must be installed."""
     if cfg.spec is None and cfg.referent not in referents.available():
         raise UserError(f"unknown referent {cfg.referent!r}; available: {', '.join(referents.available())}")
+    if cfg.spec is not None and not Path(cfg.spec).is_file():
+        raise UserError(f"spec={cfg.spec}: no such file")
     home = referents.world_of(cfg.referent, cfg.spec)
     try:
         world = worlds.world(cfg.world or home)
     except worlds.UnknownWorld as exc:
         raise UserError(str(exc)) from None
     if world.name != home:
-        others = ", ".join(referents.of_world(world.name)) or "none yet"
+        others = ", ".join(referents.carried_by(world.name)) or "none yet"
         if cfg.spec:
             raise UserError(
                 f"spec={cfg.spec} lays out scenes in world {home}, not {world.name}: leave world= out (or world={home}); "
-                f"referents of world {world.name}: {others}"
+                f"types world {world.name} carries: {others}"
             )
         carriers = referents.worlds_of(cfg.referent)
         if world.name not in carriers:
             raise UserError(
                 f"referent {cfg.referent} has no design in world {world.name}; worlds that carry {cfg.referent}: "
-                f"{', '.join(carriers)} (referents of world {world.name}: {others})"
+                f"{', '.join(carriers)} (types world {world.name} carries: {others})"
             )
     try:
         world.requires()
@@ -316,10 +328,11 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
     return world
 
 
-def check_output(out: Path, overwrite: bool) -> None:
+def check_output(out: Path, overwrite: bool, replaces: tuple[str, ...] = PRODUCTS) -> None:
     """`out` must be creatable and writable, and empty unless `overwrite`, which replaces only a
-    folder this project wrote (a dataset, a plan, an exam): a product is published by renaming
-    it to `out`, so `out` can be neither a folder of someone else's files nor the current one.
+    folder this project wrote, of a kind in `replaces` (a dataset, a plan, an exam, an export): a
+    product is published by renaming it to `out`, so `out` can be neither a folder of someone
+    else's files nor the current one.
 
     A product folder that also holds files this project did not write is refused even with
     `overwrite`: replacing the folder would delete them.
@@ -334,18 +347,25 @@ def check_output(out: Path, overwrite: bool) -> None:
             raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
         found = sorted(p.name for p in out.iterdir())
         product = product_in(out)
+        kinds = _a(" or ".join(", ".join(replaces).rsplit(", ", 1)))
         if product is None:
             raise UserError(
-                f"out={out} holds files this project did not write ({listed(found)}); overwrite=true replaces only a dataset, "
-                "plan or exam made here: choose another out"
+                f"out={out} holds files this project did not write ({listed(found)}); overwrite=true replaces only {kinds} "
+                "made here: choose another out"
             )
+        if product not in replaces:
+            raise UserError(f"out={out} holds {_a(product)} made here; overwrite=true replaces only {kinds}: choose another out")
         strays = [name for name in found if name not in PRODUCT_ENTRIES[product]]
         if strays:  # e.g. an eval report kept inside its exam: replacing the exam would delete it
             raise UserError(
-                f"out={out} holds a {product} made here and files this project did not write ({listed(strays)}), "
+                f"out={out} holds {_a(product)} made here and files this project did not write ({listed(strays)}), "
                 "which overwrite=true would delete: move them out of it, or choose another out"
             )
     check_writable(out)
+
+
+def _a(words: str) -> str:
+    return f"{'an' if words[:1] in 'aeiou' else 'a'} {words}"
 
 
 def check_writable(out: Path, inside: bool = False) -> None:
@@ -366,12 +386,15 @@ def listed(names: list[str]) -> str:
 
 
 def product_in(folder: Path) -> str | None:
-    """What this project wrote in `folder` ("dataset", "plan", "exam"), or None if it holds
-    anything else: a finished or partially assembled dataset or plan (LeRobot's meta files and
-    our scene records), or an exam (exam.json of our format)."""
+    """What this project wrote in `folder` ("dataset", "plan", "exam", "export"), or None if it
+    holds anything else: a finished or partially assembled dataset or plan (LeRobot's meta files
+    and our scene records), an exam (exam.json of our format), or a LeRobot v2.1 export of one of
+    our datasets (gen/export.py: v2.1's info.json beside our generation record)."""
     try:
         generation = json.loads((folder / GENERATION_PATH).read_text())
         if generation.get("generator") == "deconfound":
+            if _codebase_version(folder) == "v2.1":
+                return "export"
             return "plan" if generation.get("plan_only") else "dataset"
     except (OSError, ValueError, AttributeError):
         pass
@@ -383,3 +406,11 @@ def product_in(folder: Path) -> str | None:
     if (folder / SCENES_PATH).is_file() and {p.name for p in folder.iterdir()} <= DATASET_ENTRIES:
         return "dataset"
     return None
+
+
+def _codebase_version(folder: Path) -> str | None:
+    """The LeRobot format a folder's meta/info.json names, if it has one."""
+    try:
+        return json.loads((folder / "meta/info.json").read_text()).get("codebase_version")
+    except (OSError, ValueError, AttributeError):
+        return None

@@ -26,7 +26,7 @@ from tqdm import tqdm
 
 from gen.check import Broken, check
 from gen.cli import Failed, UserError, main
-from gen.config import product_in
+from gen.config import check_output
 from gen.lerobot_reader import INFO_PATH, LeRobotReader
 from gen.video import cut
 
@@ -42,7 +42,7 @@ class ExportOptions:
     dataset: str = ""  # a generated LeRobot v3.0 dataset
     format: str = "v2.1"  # v2.1: per-episode files and JSON-lines metadata (openpi, lerobot < 0.4)
     out: str = ""  # the new dataset's folder; must not exist unless overwrite=true
-    overwrite: bool = False  # replace an existing export at out (never the source dataset)
+    overwrite: bool = False  # replace an earlier export at out (a dataset, or a folder with other files, is refused)
 
 
 def _stats(row: dict, features: list[str]) -> dict:
@@ -118,10 +118,7 @@ def export(options: ExportOptions) -> None:
     source, out = Path(options.dataset), Path(options.out)
     if out.resolve() == source.resolve() or out.resolve().is_relative_to(source.resolve()):
         raise UserError(f"out={out} is inside the source dataset {source}; export somewhere else")
-    if out.exists() and any(out.iterdir()) and not options.overwrite:
-        raise UserError(f"{out} exists and is not empty; pass overwrite=true to replace it")
-    if out.exists() and any(out.iterdir()) and product_in(out) is None:
-        raise UserError(f"out={out} holds files this project did not write; overwrite=true replaces only an earlier export")
+    check_output(out, options.overwrite, replaces=("export",))
     try:
         check(source)
     except Broken as exc:

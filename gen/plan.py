@@ -11,6 +11,7 @@ of several referent types (gen/mix.py) plans and audits each type on its own and
 from __future__ import annotations
 
 import sys
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,11 +35,15 @@ SPLITS = {"train": (), "exam": (0xE7A3,)}
 PROGRESS_FROM = 10_000  # plans of this many episodes or more show a progress bar while they are drawn
 
 
-def designs(referent: Referent, n: int, seed: int, split: str = "train") -> list[Design]:
-    """The plan's roles. A spec whose values cannot fill a scene fails here, naming the file."""
+def designs(referent: Referent, n: int, seed: int, split: str = "train", stream: str | None = None) -> list[Design]:
+    """The plan's roles. A spec whose values cannot fill a scene fails here, naming the file. A
+    mix's types each draw from a `stream` of their own (their label, gen/mix.py), so two types of
+    alike scenes (negation and composition) never share one; a single type draws from the seed's."""
     from tqdm import tqdm
 
-    balance = Balance(np.random.default_rng([seed, *SPLITS[split]] if SPLITS[split] else seed))
+    own = [zlib.crc32(stream.encode())] if stream is not None else []
+    entropy = [seed, *SPLITS[split], *own]
+    balance = Balance(np.random.default_rng(entropy if len(entropy) > 1 else seed))
     try:
         return [referent.design(balance) for _ in tqdm(range(n), desc="planning", unit="ep", disable=n < PROGRESS_FROM)]
     except ReferentSpecError:
@@ -155,12 +160,12 @@ def check_audit(report: dict) -> None:
 
 def plan_and_audit(cfg: GenConfig) -> Planned:
     """The options -> the audited plan every product is built from (bad input: `UserError`)."""
-    types, roles = [], []
+    types, roles, mixed = [], [], len(cfg.shares()) > 1
     for one in cfg.shares():
         referent = load_referent(one)
         types.append((referent, sim_settings(one, worlds.world(referent.config.world))))
         try:
-            roles.append(designs(referent, one.n, one.seed, one.split))
+            roles.append(designs(referent, one.n, one.seed, one.split, stream=referent.label if mixed else None))
         except ReferentSpecError as exc:
             raise UserError(str(exc)) from None
     episodes, k = mix.interleave(roles), len(types)

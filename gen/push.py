@@ -15,6 +15,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
+from urllib.parse import urlparse
 
 from gen.cli import Failed, UserError, main
 
@@ -89,6 +90,13 @@ def _retag(api: HfApi, repo_id: str, tag: str, commit: str) -> None:
     api.create_tag(repo_id, tag=tag, revision=commit, repo_type="dataset")
 
 
+def _unreachable(exc: BaseException) -> bool:
+    """Whether the hub could not be reached at all (name resolution, a refused or timed-out connection)."""
+    import requests
+
+    return isinstance(exc, (requests.exceptions.ConnectionError, requests.exceptions.Timeout))
+
+
 def push(root: Path, repo_id: str, private: bool = False, branch: str | None = None) -> Pushed:
     from huggingface_hub import HfApi
     from huggingface_hub.errors import HfHubHTTPError
@@ -117,6 +125,8 @@ def push(root: Path, repo_id: str, private: bool = False, branch: str | None = N
         _retag(api, repo_id, tag, commit.oid)
     except (HfHubHTTPError, OSError, ValueError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if _unreachable(exc):  # no network, a wrong HF_ENDPOINT: the library's message is a retry object's repr
+            reason = f"cannot reach the hub ({urlparse(api.endpoint).netloc})"
         if stage == f"tagging {tag}":
             done = f"all {len(files)} files were committed, but the {tag} tag was not moved to that commit"
         else:

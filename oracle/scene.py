@@ -47,7 +47,6 @@ FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
-SITE = "site"  # a kind whose model is a fixture's site (core.catalog.Kind): a place on furniture, as an object
 LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
@@ -200,7 +199,7 @@ def scene_xml(
         arena = TableArena(table_full_size=native.TABLE_SIZE, table_offset=(0, 0, native.TABLE_TOP_Z))
     else:
         arena = _libero_arena(world)
-    bodies = [(kind, count) for kind, count in sorted(assets) if world.kind(kind).model != SITE]
+    bodies = [(kind, count) for kind, count in sorted(assets) if not world.kind(kind).is_site]
     objects = [_build_object(world.kind(kind), world.body_name(kind, i)) for kind, count in bodies for i in range(count)]
     objects += [_fixture(placed) for placed in world.fixtures]
     task = ManipulationTask(mujoco_arena=arena, mujoco_robots=[_robot(world)], mujoco_objects=objects)
@@ -274,7 +273,7 @@ class Scene:
         index = 0
         for kind_name, count in self.assets:
             kind = self.world.kind(kind_name)
-            if kind.model == SITE:  # the fixture's site itself: where it is, the scene's positions read
+            if kind.is_site:  # the fixture's site itself: where it is, the scene's positions read
                 site = m.site(kind.params["site"]).id
                 body_id = int(m.site_bodyid[site])
                 geoms = tuple(g for g in range(m.ngeom) if _descends(m, m.geom_bodyid[g], body_id))

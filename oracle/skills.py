@@ -15,7 +15,7 @@ from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from core.success import PUSH_DIRECTION
 from oracle.ik import ArmIK, IKError, grasp_yaw
-from oracle.scene import SITE, Scene, axis_angle
+from oracle.scene import Scene, axis_angle
 from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
@@ -96,7 +96,7 @@ class Skills:
     def clearance(self, margin: float = 0.05) -> float:
         """A height at which the hand passes over every object in the scene (places on furniture
         are not in the way: like the furniture, they stand apart from the objects' places)."""
-        return max(self.top_of(o.id)[2] for o in self.spec.objects if self._kind(o.id).model != SITE) + margin
+        return max(self.top_of(o.id)[2] for o in self.spec.objects if not self._kind(o.id).is_site) + margin
 
     def _plan(self, pos: np.ndarray, yaw: float, start: np.ndarray | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
         """The arm's goal putting the grip site at `pos`, and its joint path there from `start`
@@ -229,7 +229,7 @@ class Skills:
         """How close (up to CARRY_MARGIN) the hand, with what it holds, passes the objects standing in
         the scene, the destination aside, along the joint path `path`."""
         held = self.held[0] if self.held else None
-        standing = [o.id for o in self.spec.objects if o.id not in (held, destination_id) and self._kind(o.id).model != SITE]
+        standing = [o.id for o in self.spec.objects if o.id not in (held, destination_id) and not self._kind(o.id).is_site]
         return self.scene.hand_gap(path, held, standing, CARRY_MARGIN)
 
     def push(self, object_id: str, distance: float = 0.09, speed: float = 0.12) -> None:

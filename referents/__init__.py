@@ -155,6 +155,12 @@ def of_world(world: str) -> list[str]:
     return [name for name in available() if world_of(name) == world]
 
 
+def carried_by(world: str) -> list[str]:
+    """Every built-in type `referent=<type> world=<world>` takes: its own, those with a spec for it,
+    and those that are the same axis there (`object` in libero_object)."""
+    return [name for name in available() if world in worlds_of(name)]
+
+
 def _aliases(name: str) -> list[str]:
     """The built-in types that are the axis `name` in a world of their own (libero_object's `axis: object`)."""
     return [other for other in available() if _field(HERE / f"{other}.yaml", "axis", "") == name]

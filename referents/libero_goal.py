@@ -71,7 +71,7 @@ def validate(cfg: ReferentConfig) -> None:
     if not any(_aims(cfg, carried) for carried in goals):
         raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place any object may be asked to go")
     world = worlds.world(cfg.world)
-    sited = {c.name for c in cfg.role("destination") if world.kind(c.kind).model == "site"}
+    sited = {c.name for c in cfg.role("destination") if world.kind(c.kind).is_site}
     if set(_sites(cfg)) - set(cfg.holdout) != sited or not set(_sites(cfg).values()) <= set(range(len(cfg.layout.slots))):
         raise cfg.fail("sites", "maps each place on furniture (a destination of a site kind) to its slot of layout.slots")
     if len([c for c in cfg.objects if c.name not in sited]) > len(_table_slots(cfg)):

@@ -1,5 +1,5 @@
 """A dataset's first frames, one per referent type, each under its instruction (the README's picture
-of a mixed dataset): `python scripts/first_frames.py <dataset> [camera=] [out=<dataset>/first_frames.png]`.
+of a mixed dataset): `python scripts/first_frames.py <dataset> [camera=] [out=<dataset>-first_frames.png]`.
 
 What a policy sees at the start of an episode of each type, and what it is told: the quickest
 check that the words name what the picture shows (a color word is what a person would call the
@@ -25,7 +25,7 @@ LABEL_HEIGHT = 44  # pixels under each frame for the type, its world and the ins
 class FirstFramesOptions:
     dataset: str = ""  # a finished dataset (python -m gen ...)
     camera: str | None = None  # an image key's camera (image, wrist_image, ...); default the dataset's first
-    out: str | None = None  # default <dataset>/first_frames.png
+    out: str | None = None  # default <dataset>-first_frames.png, beside the dataset (not in it: gen.push would upload it)
 
 
 def picture(options: FirstFramesOptions) -> None:
@@ -57,7 +57,7 @@ def picture(options: FirstFramesOptions) -> None:
         where = f" @ {record['world']}" if "world" in record and record["world"] else ""
         text = f"{record['referent']}{where}\n" + "\n".join(textwrap.wrap(record["instruction"], width=size // 6)[:2])
         draw.multiline_text((i * size + 3, size + 2), text, fill="black", spacing=1)
-    out = Path(options.out or root / "first_frames.png")
+    out = Path(options.out or root.parent / f"{root.name}-first_frames.png")
     sheet.save(out)
     print(f"wrote {out} ({len(tiles)} types, camera {key.rsplit('.', 1)[-1]})")
 

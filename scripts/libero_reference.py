@@ -46,10 +46,11 @@ from pathlib import Path
 
 import numpy as np
 
+CAMERAS = ("agentview", "robot0_eye_in_hand")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "eval"))  # the LIBERO side of sim=libero: numpy and LIBERO only
 
-from libero_server import CAMERAS, fixtures, floor_bddl, make_env, pose_from_record, positions, table_bddl, task_bddl  # noqa: E402
+from libero_server import fixtures, floor_bddl, make_env, pose_from_record, positions, table_bddl, task_bddl  # noqa: E402
 
 
 def _labels(env, camera: str, size: int, things: list[str]) -> np.ndarray:  # noqa: ANN001

@@ -177,7 +177,7 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     from gen import scenes
     from gen.lerobot_reader import LeRobotReader
 
-    reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.model == "site"}
+    reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.is_site}
     records = scenes.read(dataset)
     if "world" in records:
         records = records[records["world"] == world.name]

@@ -249,9 +249,10 @@ def test_a_large_plan_shows_its_progress(tmp_path: Path) -> None:
 
 def test_help_says_where_an_exam_goes_by_default() -> None:
     shown = run_gen("--help")
-    assert "default datasets/<referent> (split=exam: datasets/<referent>-exam)" in shown.stdout
+    assert "default datasets/<referent>, or datasets/<referent>-<world> in another world (exam: ...-exam)" in shown.stdout
     readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
-    assert "`datasets/<referent>` (`datasets/<referent>-exam` with `split=exam`)" in readme
+    row = "`datasets/<referent>`, `datasets/<referent>-<world>` in another world than its own (`-exam` added with `split=exam`)"
+    assert row in readme
 
 
 def test_the_multi_axis_parts_make_only_the_sets_they_use() -> None:
@@ -275,3 +276,51 @@ def test_parts_finished_in_an_earlier_sitting_stay_in_the_results(tmp_path: Path
     assert merged["commands"] == ["python -m gen a", "python -m gen b"] and merged["not_run"] == ["loo"]
     assert merged["timings_s"] == {"train axes": 1.0, "train tiers": 2.0}
     assert carried_over(now, tmp_path / "absent.json") is now
+
+
+@pytest.mark.parametrize("option", ["targets", "holdout", "distractor_only"])
+def test_an_empty_list_that_would_restrict_a_plan_is_refused(option: str, tmp_path: Path) -> None:
+    """`targets=[]` was recorded in meta/generation.json and then ignored (every value still a target)."""
+    result = run_gen("referent=color", f"{option}=[]", "plan_only=true", f"out={tmp_path / 'plan'}")
+    says = f"error: {option}=[] names no value; leave {option} out, or name the values ({option}=[a,b])"
+    assert result.returncode == 2 and result.stderr.strip().splitlines() == [says]
+    assert not (tmp_path / "plan").exists()
+
+
+def test_a_list_option_takes_a_bare_value_as_a_one_item_list(tmp_path: Path) -> None:
+    """`holdout=red` (and `holdout=red,green`) mean `holdout=[red]` (`[red,green]`), as `suites=all` does."""
+    for value, held in (("red", ["red"]), ("red,green", ["red", "green"])):
+        out = tmp_path / value.replace(",", "-")
+        result = run_gen("referent=color", f"holdout={value}", "n=20", "plan_only=true", f"out={out}")
+        assert result.returncode == 0, result.stderr
+        assert json.loads((out / "meta/generation.json").read_text())["config"]["holdout"] == held
+    from eval.suites import SuitesOptions
+    from gen.cli import parse
+
+    assert parse("python -m eval.suites", SuitesOptions, ["policy=position", "suites=all"]).suites == ["all"]
+
+
+def test_a_missing_spec_file_is_named_as_missing(tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere.yaml"
+    result = run_gen(f"spec={missing}", "world=libero_spatial", "plan_only=true", f"out={tmp_path / 'plan'}")
+    assert result.returncode == 2 and result.stderr.strip() == f"error: spec={missing}: no such file"
+
+
+def test_a_world_that_cannot_carry_a_type_lists_every_type_it_carries(tmp_path: Path) -> None:
+    import referents
+
+    result = run_gen("referent=ordinal", "world=libero_spatial", "plan_only=true", f"out={tmp_path / 'plan'}")
+    line = result.stderr.strip()
+    assert result.returncode == 2 and "types world libero_spatial carries: " in line, line
+    carried = line.split("types world libero_spatial carries: ")[1].rstrip(")").split(", ")
+    assert {"color", "relation"} <= set(carried) == set(referents.carried_by("libero_spatial"))
+
+
+@pytest.mark.parametrize("command", ["eval", "eval.suites"])
+def test_help_names_every_registered_policy(command: str) -> None:
+    from eval.registry import names
+
+    shown = subprocess.run([sys.executable, "-m", command, "--help"], capture_output=True, text=True).stdout
+    policy = next(line for line in shown.splitlines() if line.strip().startswith("policy="))
+    missing = [name for name in names() if name not in policy]
+    assert not missing, (missing, policy)

@@ -111,3 +111,28 @@ def test_ctrl_c_keeps_the_finished_rollouts_and_resume_gives_the_uninterrupted_r
         assert (out / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oracle", "whole"], "the partial takes are cleaned up"
     assert sorted(os.listdir(out)) == sorted(os.listdir(tmp_path / "whole"))
+
+
+def test_ctrl_c_while_the_shortcut_baseline_is_measured_keeps_its_rollouts_too(exam: Path, tmp_path: Path) -> None:
+    """The `position` baseline runs after the policy's rollouts (once per exam; a fresh cache here):
+    interrupted then, the line says so and how many of its rollouts are kept, and resume=true goes on
+    from them to the report."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    argv = [sys.executable, "-m", "eval", "policy=nothing", f"exam={exam}", f"out={tmp_path / 'nothing'}", "workers=1"]
+    kept = tmp_path / ".nothing.partial" / "baseline" / ".position.partial" / "rollouts"
+    taking = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, preexec_fn=_default_sigint
+    )
+    deadline = time.monotonic() + 180
+    while len(list(kept.glob("*.pkl"))) < 2 and taking.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    taking.send_signal(signal.SIGINT)
+    _, err = taking.communicate()
+    last = err.strip().splitlines()[-1]
+    assert taking.returncode == 130 and "18 of 18 rollouts kept" in last, err
+    saved = len(list(kept.glob("*.pkl")))
+    assert 2 <= saved < 18 and f"while the `position` baseline was measured: {saved} of 18 rollouts kept" in last, last
+    resumed = subprocess.run([*argv, "resume=true"], capture_output=True, text=True, env=env)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "baseline" in (tmp_path / "nothing" / "report.json").read_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "nothing"], "the partial takes are cleaned up"

@@ -77,10 +77,8 @@ def test_the_v21_export_loads_in_lerobot_v21_with_the_same_frames_and_actions(
 
 def test_bad_exports_are_refused_and_rerunning_is_safe(exported: Path, object_dataset: Path, tmp_path: Path) -> None:
     again = _export(str(object_dataset), "format=v2.1", f"out={exported}")
-    assert (
-        again.returncode == 2
-        and again.stderr.strip() == f"error: {exported} exists and is not empty; pass overwrite=true to replace it"
-    )
+    assert again.returncode == 2
+    assert again.stderr.strip() == f"error: out={exported} is not empty; pass overwrite=true to replace it"
     info = (exported / "meta" / "info.json").read_text()
     replaced = _export(str(object_dataset), "format=v2.1", f"out={exported}", "overwrite=true")
     assert replaced.returncode == 0 and (exported / "meta" / "info.json").read_text() == info
@@ -91,3 +89,37 @@ def test_bad_exports_are_refused_and_rerunning_is_safe(exported: Path, object_da
     assert unknown.returncode == 2 and unknown.stderr.strip() == "error: format must be one of v2.1, got 'v1.6'"
     missing = _export(str(tmp_path / "nothing"), f"out={tmp_path / 'y'}")
     assert missing.returncode == 2 and "cannot export" in missing.stderr and not (tmp_path / "y").exists()
+
+
+def test_overwrite_replaces_only_an_earlier_export_and_never_a_users_files(
+    exported: Path, object_dataset: Path, tmp_path: Path
+) -> None:
+    """overwrite=true replaces an earlier export; a v3.0 dataset, an exam holding the user's analysis,
+    an export the user added notes to, or a file are refused in one line, every byte left in place."""
+    import shutil
+
+    dataset = tmp_path / "dataset"
+    shutil.copytree(object_dataset, dataset)
+    (dataset / "NOTES.txt").write_text("mine")
+    exam = tmp_path / "exam"
+    exam.mkdir()
+    (exam / "exam.json").write_text(json.dumps({"format": "deconfound-exam", "version": 2}))
+    (exam / "analysis.txt").write_text("mine")
+    noted = tmp_path / "noted"
+    shutil.copytree(exported, noted)
+    (noted / "NOTES.txt").write_text("mine")
+    for out, says in (
+        (dataset, f"out={dataset} holds a dataset made here; overwrite=true replaces only an export"),
+        (exam, f"out={exam} holds an exam made here; overwrite=true replaces only an export"),
+        (noted, "files this project did not write (NOTES.txt)"),
+    ):
+        before = sorted((p.relative_to(out), p.read_bytes() if p.is_file() else b"") for p in out.rglob("*"))
+        refused = _export(str(object_dataset), "format=v2.1", f"out={out}", "overwrite=true")
+        assert refused.returncode == 2 and len(refused.stderr.strip().splitlines()) == 1, refused.stderr
+        assert says in refused.stderr
+        assert sorted((p.relative_to(out), p.read_bytes() if p.is_file() else b"") for p in out.rglob("*")) == before
+    a_file = tmp_path / "a-file"
+    a_file.write_text("mine")
+    refused = _export(str(object_dataset), "format=v2.1", f"out={a_file}")
+    assert refused.returncode == 2 and refused.stderr.strip() == f"error: out={a_file} exists and is not a folder"
+    assert a_file.read_text() == "mine"

@@ -152,8 +152,9 @@ def test_the_same_pictures_and_poses_at_generated_states(mixed: Path, world: str
 
 @pytest.mark.parametrize("name", sorted(AXES))
 def test_its_exam_separates_the_reference_policies(name: str, tmp_path: Path) -> None:
-    """The oracle does the task and obeys every swap; `position` obeys within its interval of chance
-    and no better than the oracle; `nothing` scores 0 (one trial: it runs every row to its horizon)."""
+    """The oracle does the task and obeys every swap, landing within 2 cm of where it holds the named
+    object (a bowl: its rim, not its centre); `position` obeys within its interval of chance and no
+    better than the oracle; `nothing` scores 0 (one trial: it runs every row to its horizon)."""
     exam = read(make_dataset(tmp_path / "exam", f"referent={name}", f"world={AXES[name]}", "n=2", "split=exam",
                              "image_size=32", "seed=2"))  # fmt: skip
     faces = {
@@ -161,6 +162,7 @@ def test_its_exam_separates_the_reference_policies(name: str, tmp_path: Path) ->
         for p in ("oracle", "position")
     }
     assert faces["oracle"]["task"]["rate"] == 1.0 and faces["oracle"]["obeyed_name"]["rate"] == 1.0
+    assert faces["oracle"]["obeyed_name"]["by_level"]["2cm"]["rate"] == 1.0
     obeyed = faces["position"]["obeyed_name"]
     assert obeyed["ci"][0] <= obeyed["chance"] <= obeyed["ci"][1] and obeyed["rate"] < 1.0
     one = exam.trials[exam.trials["trial"] == 0]

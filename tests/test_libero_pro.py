@@ -68,6 +68,37 @@ def test_the_perturbed_instruction_is_delivered(kind: str) -> None:
 
 
 @pytest.mark.fast
+@pytest.mark.parametrize("kind", ["_lan", "_task"])
+def test_each_swap_changes_only_the_name_in_the_delivered_instruction(kind: str) -> None:
+    """A swap is the task row's own words with what names the target changed (the suite's wording
+    kept, not LIBERO's file-name template), or it is left out, saying why; in a `_task` suite no swap
+    names the base task's own target, where the layout alone leads a policy that ignores the words."""
+    import os.path
+
+    articles = {"the", "a", "an"}
+    kept = 0
+    for name in [n for n in _covered() if n.endswith(kind)]:
+        suite = suite_of(CanonicalOptions(suite=name))
+        for task in suite.tasks:
+            spec = trial_spec(suite, task, 0, 0, world_sim(suite.world))
+            base = libero.problem(suite.world.suite, libero.base_task(name, task))
+            for cf in spec.counterfactuals:
+                said, swapped = spec.instruction.split(), cf.instruction.split()
+                head = len(os.path.commonprefix([said, swapped]))
+                tail = len(os.path.commonprefix([said[head:][::-1], swapped[head:][::-1]]))
+                old, new = set(said[head : len(said) - tail]), set(swapped[head : len(swapped) - tail])
+                assert old <= set(cf.changed[0].split()) | articles, (name, task, spec.instruction, cf.instruction)
+                assert new <= set(cf.changed[1].split()) | articles, (name, task, spec.instruction, cf.instruction)
+                assert kind != "_task" or cf.target != base.objects[base.goal[0][1]], (name, task, cf)
+                kept += 1
+            design = suite.referent.code.canonical(suite.referent.config, suite.problem(task))
+            left = suite.swaps(task, design, spec.instruction)[1]
+            assert len(left) + len(spec.counterfactuals) == len(design.counterfactuals)
+            assert all(reason for reason in left.values())
+    assert kept > 0
+
+
+@pytest.mark.fast
 def test_suites_that_change_no_words_deliver_the_base_tasks_instruction() -> None:
     """A suite that moves, recolours or adds objects keeps the base task's words (LIBERO's file-name
     instruction, what LIBERO-trained policies were trained on)."""

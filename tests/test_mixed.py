@@ -15,10 +15,11 @@ from lerobot.datasets.lerobot_dataset import LeRobotDataset  # lerobot's own loa
 from PIL import Image
 
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.spec import EpisodeSpec
 from gen import scenes
 from gen.cli import main
 from gen.config import GenConfig, parse
-from gen.plan import plan_and_audit
+from gen.plan import designs, plan_and_audit
 from helpers import make_dataset
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -143,13 +144,17 @@ def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path:
     assert (lora / "adapter_config.json").is_file() and json.loads((lora / "config.json").read_text())["use_peft"]
 
 
-def test_a_picture_of_each_types_first_frame(mixed: Path, tmp_path: Path) -> None:
-    """scripts/first_frames.py: one tile per type, each under its instruction."""
-    out = tmp_path / "first.png"
+def test_a_picture_of_each_types_first_frame(mixed: Path) -> None:
+    """scripts/first_frames.py: one tile per type, each under its instruction, written beside the
+    dataset (in it, `gen ... overwrite=true` would refuse it as the user's and gen.push would upload it)."""
+    inside = sorted(p.relative_to(mixed) for p in mixed.rglob("*"))
     script = ROOT / "scripts" / "first_frames.py"
-    done = subprocess.run([sys.executable, str(script), str(mixed), f"out={out}"], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, str(script), str(mixed)], capture_output=True, text=True)
     assert done.returncode == 0 and f"({len(STUDY)} types" in done.stdout, done.stderr[-2000:]
+    out = mixed.parent / f"{mixed.name}-first_frames.png"
     assert Image.open(out).width == len(STUDY) * 192
+    assert sorted(p.relative_to(mixed) for p in mixed.rglob("*")) == inside
+    out.unlink()
 
 
 def test_a_killed_mix_resumes_to_the_same_bytes(mixed: Path, tmp_path: Path) -> None:
@@ -174,14 +179,28 @@ def test_a_mix_of_native_types(tmp_path: Path) -> None:
 
 @pytest.mark.fast
 def test_a_mixed_plan_holds_each_types_own_plan_in_turns(tmp_path: Path) -> None:
-    """Each type's episodes have the roles its own plan of n/k draws with the same seed, every type
-    taking its turn, and each type's audit (20 episodes each) finds no leak."""
+    """Each type's episodes have the roles its own plan of n/k draws with the same seed in a stream
+    of its own, every type taking its turn, and each type's audit (20 episodes each) finds no leak."""
     mixed = plan_and_audit(parse(["referent=[object,color,category]", "n=60", f"out={tmp_path / 'mix'}"]))
     assert [spec.referent for spec in mixed.specs[:6]] == ["object", "color", "category"] * 2
     for place, share in enumerate(mixed.shares):
-        alone = plan_and_audit(parse([f"referent={share.referent.name}", "n=20", f"out={tmp_path / 'one'}"]))
-        assert mixed.designs[place::3] == alone.designs
+        assert mixed.designs[place::3] == designs(share.referent, 20, 0, stream=share.referent.label)
         assert share.audit["verdict"] == "no leak"
+
+
+@pytest.mark.fast
+def test_types_of_alike_scenes_never_share_their_scenes_in_a_mix(tmp_path: Path) -> None:
+    """Negation and composition lay out the same four groceries the same way: drawn from one stream
+    they gave one seed's episodes identical scenes and the same target; each draws from its own."""
+    both = "referent=[negation@libero_object,composition@libero_object]"
+    mixed = plan_and_audit(parse([both, "n=40", f"out={tmp_path / 'm'}"]))
+
+    def scene(spec: EpisodeSpec) -> tuple:
+        return (tuple(sorted((o.kind, o.slot) for o in spec.objects)), spec.object(spec.target).kind)
+
+    pairs = list(zip(mixed.specs[0::2], mixed.specs[1::2]))
+    same = sum(scene(a) == scene(b) for a, b in pairs)
+    assert same < len(pairs) / 4, f"{same} of {len(pairs)} episode pairs share their scene and target"
 
 
 @pytest.mark.fast

@@ -212,12 +212,27 @@ def test_trials_parquet_gives_away_nothing_but_the_instruction(exams: dict[str, 
         assert not [o["id"] for o in scene["objects"] if f'"{o["id"]}"' in rest], rest
 
 
+def test_score_replaces_a_report_only_when_asked_as_eval_does(exams: dict[str, Path], tmp_path: Path) -> None:
+    """One rule for `python -m eval` and `python -m eval.score`: a folder holding a report is refused
+    without overwrite=true (the own-code loop scores into the logs' folder), and with it exactly the
+    report files are replaced."""
+    logs = nothing_logs(exams["object"], tmp_path / "rollouts.parquet")
+    (tmp_path / "report.json").write_text("an earlier report")
+    (tmp_path / "analysis.txt").write_text("mine")
+    line = one_line(run("eval.score", f"exam={exams['object']}", f"logs={logs}"))
+    assert f"out={tmp_path} already holds a report (report.json); pass overwrite=true" in line, line
+    assert (tmp_path / "report.json").read_text() == "an earlier report"
+    assert run("eval.score", f"exam={exams['object']}", f"logs={logs}", "policy=nothing", "overwrite=true").returncode == 0
+    assert json.loads((tmp_path / "report.json").read_text())["policy"] == "nothing"
+    assert (tmp_path / "analysis.txt").read_text() == "mine"
+
+
 def test_score_refuses_an_out_that_is_a_file(exams: dict[str, Path], tmp_path: Path) -> None:
     logs = nothing_logs(exams["object"], tmp_path / "rollouts.parquet")
     taken = tmp_path / "report"
     taken.write_text("mine")
     line = one_line(run("eval.score", f"exam={exams['object']}", f"logs={logs}", f"out={taken}"))
-    assert f"out={taken} is a file" in line, line
+    assert f"out={taken} exists and is not a folder" in line, line
     assert taken.read_text() == "mine" and sorted(p.name for p in tmp_path.iterdir()) == ["report", "rollouts.parquet"]
 
 

@@ -41,7 +41,10 @@ def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path
     _, info = env.reset()
     assert not ANSWER & set(info) and info["instruction"] == trials["instruction"].iloc[0]
     env.close()
-    faces = json.loads((tmp_path / "report.json").read_text())["faces"]
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["policy"] == "my_policy" and "python -m eval policy=position" in report["baseline_source"]
+    assert "Shortcut column: none" in (tmp_path / "report.md").read_text()  # the report says why it is empty
+    faces = report["faces"]
     assert faces["obeyed_name"]["rate"] >= 0.8 and faces["true_target"]["rate"] <= 0.1  # it reads the instruction
     assert faces["nonsense"]["k"] == 0 and faces["task"]["k"] == 0  # it never lifts anything
 

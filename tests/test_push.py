@@ -4,6 +4,7 @@ hub on loopback (tests/hubserver.py) that records every request."""
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -126,6 +127,26 @@ def test_refuses_incomplete_or_damaged_datasets(object_dataset: Path, tmp_path: 
         assert not hub.requests
 
 
+def test_a_video_that_cannot_be_decoded_fails_the_check_and_is_never_pushed(object_dataset: Path, tmp_path: Path) -> None:
+    """2,000 bytes zeroed in the middle of one mp4: lerobot's loader cannot decode it, so gen.check
+    names the file and the frame that fails, and gen.push, which it gates, sends nothing."""
+    damaged = tmp_path / "damaged"
+    shutil.copytree(object_dataset, damaged)
+    video = next((damaged / "videos").rglob("*.mp4"))
+    data = bytearray(video.read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 2000] = bytes(2000)
+    video.write_bytes(bytes(data))
+    check = subprocess.run([sys.executable, "-m", "gen.check", str(damaged)], capture_output=True, text=True)
+    assert check.returncode == 1 and len(check.stderr.strip().splitlines()) == 1, check.stderr
+    assert str(video.relative_to(damaged)) in check.stderr and "cannot be decoded" in check.stderr
+    assert re.search(r"frame \d+ \(episode \d+'s frame \d+\)", check.stderr), check.stderr
+    with Hub() as hub:
+        result = _push(hub, damaged, "repo_id=lab/bad")
+        assert result.returncode == 1 and "refusing to push" in result.stderr and "cannot be decoded" in result.stderr
+        assert not hub.requests
+
+
 @pytest.fixture
 def exam(tmp_path: Path) -> Path:
     from helpers import make_dataset
@@ -141,3 +162,13 @@ def test_exams_push_with_their_own_tag(exam: Path) -> None:
         assert set(repo.files) == {"exam.json", "trials.parquet", "answers.parquet", "README.md"}
         assert f"exam-v{EXAM_VERSION}" in repo.refs and "v1" in repo.refs  # the format's tag; the branch asked for
         assert "trials.parquet" in yaml.safe_load(repo.files["README.md"].decode().split("---")[1])["configs"][0]["data_files"]
+
+
+def test_an_unreachable_hub_is_named_in_one_line(object_dataset: Path) -> None:
+    env = {**os.environ, "HF_ENDPOINT": "http://127.0.0.1:9", "HF_TOKEN": TOKEN, "HF_HUB_OFFLINE": "0"}
+    result = subprocess.run(
+        [sys.executable, "-m", "gen.push", str(object_dataset), "repo_id=lab/x"], capture_output=True, text=True, env=env
+    )
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 1 and len(lines) == 1 and "cannot reach the hub (127.0.0.1:9)" in lines[0], result.stderr
+    assert "Retry" not in lines[0] and "nothing was committed" in lines[0]

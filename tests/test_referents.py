@@ -38,7 +38,7 @@ def test_every_value_is_target_and_distractor_across_slots(planned: tuple) -> No
     ref, specs = planned
     table = audit(ref, specs)["balance"]
     world = worlds.world(ref.config.world)
-    furniture = {c.name for c in ref.config.objects if world.kind(c.kind).model == "site"}  # places that never move
+    furniture = {c.name for c in ref.config.objects if world.kind(c.kind).is_site}  # places that never move
     placed = ref.config.naming == "relation"  # values that are places (LIBERO-Spatial's): one slot each, by definition
     assert len(table) >= 2
     for value, roles in table.items():

@@ -13,11 +13,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from core import contact, worlds
 from core.exam import Exam, read
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
 from eval.report import html, plots
-from eval.score import LogError, contact_points, score
+from eval.score import LogError, score
 from helpers import make_dataset
 
 FAR = [-0.5, 0.0, 1.3]  # where the hand is when it goes nowhere: above the robot's base
@@ -36,7 +37,7 @@ def _log(row: pd.Series, mode: str, located: list[float] | None = None) -> dict:
     start = {o.id: np.asarray(o.pos, float) for o in spec.objects}
     end = {k: v + ([0.0, 0.0, 0.1] if mode == "achieved" and k == row["target"] else 0.0) for k, v in start.items()}
     objects = {k: np.stack([start[k], end[k]]) for k in start}
-    point = contact_points(spec, objects, row["target"], row["program"])[1]
+    point = _contact(spec, objects, row["target"], row["program"])
     lift = {"achieved": 0.0, "2cm": 0.01, "5cm": 0.035}
     start = list(row["initial_ee"])  # step 0: the hand where the trial starts
     ee = [start, (point + [0.0, 0.0, lift[mode]]).tolist() if mode in lift else start]
@@ -48,6 +49,15 @@ def _log(row: pd.Series, mode: str, located: list[float] | None = None) -> dict:
         "error": None,
         "located": located,
     }
+
+
+def _contact(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
+    """Where the oracle's hand meets `target` at the rollout's end: its grasp point, or over a destination the release point."""
+    kind = worlds.kind(spec.object(target).kind, spec.sim.world)
+    if program == "place":
+        carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world)
+        return contact.release_point(kind, objects[target][1], carried)
+    return contact.grasp_point(kind, objects[target][1])
 
 
 MODES = ("achieved", "2cm", "5cm", "far")

