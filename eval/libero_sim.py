@@ -148,11 +148,12 @@ class Rows:
         asks, `predicate`)."""
         from eval.libero_server import floor_bddl, table_bddl
 
-        first = next(iter(self.union))
+        first, second, *_ = self.union  # a placeholder goal LIBERO's parser takes
+        goal = f"(On {first} {second})"
         if self.world.fixtures:
-            return table_bddl(self.world.suite, self.union, f"(On {first} main_table)")
+            return table_bddl(self.world.suite, self.union, goal)
         containers = [i for i, kind in self.union.items() if self.world.kind(kind).contain is not None]
-        return floor_bddl(self.union, containers, f"(On {first} floor)")
+        return floor_bddl(self.union, containers, goal)
 
 
 def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> list[str] | None:
