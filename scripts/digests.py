@@ -4,7 +4,8 @@ mix, at fixed seeds and small sizes.
 
     python scripts/digests.py <digests.json> [only=<name>,...]
 
-Run it before and after a change that must not alter any product (a refactor), then compare:
+The products are made by the checkout this script is in (its folder on PYTHONPATH), so a worktree
+of another commit digests that commit's. Run it before and after a change that must not alter any product (a refactor), then compare:
 `python scripts/digests.py --compare before.json after.json` lists every file that differs. Each
 command runs in a fresh folder with a relative `out`, so the records that name it agree; a run's
 wall time and the spec file's absolute path (meta/generation.json) are left out of its digest.
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -23,6 +25,7 @@ NATIVE = ("object", "color", "category", "ordinal", "relation", "negation", "com
 LIBERO_TYPES = ("libero_object", "libero_spatial", "libero_goal")
 IN_LIBERO = (("color", "libero_spatial"), *((t, "libero_object") for t in ("category", "negation", "composition", "ordinal")))
 SMALL = ("n=2", "image_size=32", "seed=3", "workers=1")
+ROOT = Path(__file__).resolve().parents[1]  # the checkout whose generator runs (a worktree of another commit, say)
 
 
 def commands() -> dict[str, list[str]]:
@@ -58,7 +61,9 @@ def digests(only: set[str] | None = None) -> dict[str, dict[str, str]]:
         if only and name not in only:
             continue
         with tempfile.TemporaryDirectory() as tmp:
-            done = subprocess.run([sys.executable, "-m", *argv, f"out=products/{name}"], cwd=tmp, capture_output=True, text=True)
+            env = {**os.environ, "PYTHONPATH": str(ROOT)}
+            argv = [sys.executable, "-m", *argv, f"out=products/{name}"]
+            done = subprocess.run(argv, cwd=tmp, capture_output=True, text=True, env=env)
             if done.returncode:
                 found[name] = {"error": done.stderr.strip().splitlines()[-1] if done.stderr.strip() else str(done.returncode)}
                 continue
