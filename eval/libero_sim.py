@@ -39,6 +39,7 @@ from core.exam import Exam
 from core.layout import IMAGE_PREFIX, STATE_KEY, TASK_KEY
 from core.spec import EpisodeSpec
 from core.worlds import libero
+from eval.rollout import SimError
 
 ROOT = Path(__file__).resolve().parents[1]
 PYTHON = ROOT / ".venv-libero" / "bin" / "python"  # LIBERO's own environment (make setup)
@@ -51,7 +52,7 @@ class SimUnavailable(ValueError):
     """The exam, the policy or this machine cannot take `sim=libero`; the message says why."""
 
 
-class SimFailed(RuntimeError):
+class SimFailed(Exception):
     """LIBERO's server stopped: the take stops (finished rollouts are kept, resume continues)."""
 
 
@@ -205,7 +206,7 @@ class LiberoSim:
             raise SimFailed(f"LIBERO's server stopped ({self._stderr()})")
         answer, out = reply
         if not answer.pop("ok"):
-            raise RuntimeError(f"LIBERO's environment: {answer['error']}")
+            raise SimError(f"LIBERO's environment: {answer['error']}")
         return answer, out
 
     def _stderr(self) -> str:

@@ -72,6 +72,10 @@ def observe(scene: Scene, cameras: Cameras | None, instruction: str, occluded: b
     return obs
 
 
+class SimError(RuntimeError):
+    """The simulator failed on a row (not the policy): that rollout breaks, the take goes on."""
+
+
 class ProfileMismatch(ValueError):
     """The policy speaks another profile than the exam (e.g. joint targets on a libero exam):
     no rollout can succeed, so the whole exam stops with this one line."""
@@ -187,11 +191,15 @@ class Runner:
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
         features, sim, render = spec.sim.layout, self.sim, self.policy.needs_images
-        sim.begin(row, spec, render)
-        log.record(sim)
-        for _ in range(features.settle_steps):  # as the profile's own environment starts a rollout
-            sim.step(features.hold_action(spec.sim.robot_home))
+        try:
+            sim.begin(row, spec, render)
             log.record(sim)
+            for _ in range(features.settle_steps):  # as the profile's own environment starts a rollout
+                sim.step(features.hold_action(spec.sim.robot_home))
+                log.record(sim)
+        except SimError as exc:
+            log.error = f"the simulator could not start the row: {exc}"
+            return log
         locate = getattr(self.policy, "locate", None)
         wants = getattr(self.policy, "wants_observation", None)
         for t in range(int(row["max_steps"])):
@@ -212,9 +220,14 @@ class Runner:
             if problem:
                 log.error = f"step {t}: {problem}"
                 break
-            sim.step(action)
+            try:
+                sim.step(action)
+            except SimError as exc:
+                log.error = f"step {t}: the simulator failed: {exc}"
+                break
             log.record(sim)
-        log.sim_success = sim.verdict(row)
+        if not log.error:
+            log.sim_success = sim.verdict(row)
         return log
 
     def close(self) -> None:

@@ -5,8 +5,9 @@ mix, at fixed seeds and small sizes.
     python scripts/digests.py <digests.json> [only=<name>,...]
 
 The products are made by the checkout this script is in (its folder on PYTHONPATH), so a worktree
-of another commit digests that commit's. Run it before and after a change that must not alter any product (a refactor), then compare:
-`python scripts/digests.py --compare before.json after.json` lists every file that differs. Each
+of another commit digests that commit's. Run it before and after a change that must not alter any
+product (a refactor), then compare: `python scripts/digests.py --compare before.json after.json`
+lists every file that differs. Each
 command runs in a fresh folder with a relative `out`, so the records that name it agree; a run's
 wall time and the spec file's absolute path (meta/generation.json) are left out of its digest.
 """
