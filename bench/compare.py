@@ -36,14 +36,14 @@ from pathlib import Path
 import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults)
-import referents
 from core import parquet, worlds
 from core.layout import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
-from gen import scenes
-from gen.cli import UserError, main
+from gen.build import scenes
+from gen.build.run import generate
 from gen.config import parse
-from gen.run import generate
+from jobs.cli import UserError, main
+from referents import registry
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -113,7 +113,7 @@ def floor(dataset: Path) -> float:
     from oracle.ik import ArmIK
     from oracle.render import Cameras
     from oracle.scene import scene_for
-    from referents import demo_of
+    from referents.registry import demo_of
 
     specs = [EpisodeSpec.from_json(s) for s in scenes.read(dataset)["spec"]]
     scene = scene_for(specs[0].assets)
@@ -227,7 +227,7 @@ def compare_libero(options: CompareOptions, LeRobotDataset: type) -> None:  # no
         raise UserError(str(exc)) from None
     if not world.suite:
         raise UserError(f"world must be native or a LIBERO world, got {options.world!r}")
-    referent = options.referent or referents.of_world(world.name)[0]
+    referent = options.referent or registry.of_world(world.name)[0]
     n, size = options.n, LIBERO.image_size
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)

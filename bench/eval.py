@@ -22,9 +22,9 @@ from core.exam import read
 from eval.battery import take
 from eval.policies import PolicyError
 from eval.registry import make
-from gen.cli import UserError, main
+from gen.build.run import generate
 from gen.config import parse
-from gen.run import generate
+from jobs.cli import UserError, main
 
 
 @dataclass

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from typing import Optional
 
 from core.rates import wilson
-from gen.cli import main
 from gen.config import GenConfig, validate
-from gen.plan import plan_and_audit
+from gen.planning.plan import plan_and_audit
+from jobs.cli import main
 
 
 @dataclass
@@ -36,8 +36,8 @@ _producers: dict = {}
 
 def _first_try(cfg: GenConfig, index: int) -> tuple[int, bool, str, int]:
     """(episode, success, why not, control steps) of the first realisation of episode `index`."""
-    from gen.plan import realize
-    from gen.produce import Producer
+    from gen.build.produce import Producer
+    from gen.planning.plan import realize
     from oracle.episode import demonstrate
 
     if "planned" not in _producers:

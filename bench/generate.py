@@ -19,12 +19,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List
 
-import gen.produce as produce
+import gen.build.produce as produce
 from core import worlds
-from gen.cli import main
 from gen.config import GenConfig, load_referent, validate
-from gen.lerobot_writer import Layout, LeRobotWriter
-from gen.plan import designs, sim_settings
+from gen.lerobot.writer import Layout, LeRobotWriter
+from gen.planning.plan import designs, sim_settings
+from jobs.cli import main
 from oracle.render import Cameras
 
 CLOCKS: dict[str, float] = {"render": 0.0, "encode": 0.0}

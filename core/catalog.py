@@ -25,7 +25,7 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 
 
 GRIPPER_SPAN = 0.08  # the Panda's fingers open this far apart: nothing wider across its grasp axis can be picked
-SITE = "site"  # the model of a place on a fixture (core/worlds/libero.py): somewhere things go, nothing to pick up
+SITE = "site"  # the model of a place on a fixture (core/libero.py): somewhere things go, nothing to pick up
 RIM_DEPTH = 0.02  # measured from LIBERO-Spatial's 50 first states: 10 mm let the wall slip in 4, 20 mm in none
 
 
@@ -35,7 +35,7 @@ class Kind:
 
     `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
     arguments (`libero`: LIBERO's model file `params["xml"]`; `site`: a place on a fixture, the
-    fixture's site `params["site"]`, which no scene moves; core/worlds/libero.py); `size` is
+    fixture's site `params["site"]`, which no scene moves; core/libero.py); `size` is
     the extent (x, y, z) in the object's resting frame (its model frame turned by `quat`),
     `bottom` the height of its lowest point below the body origin, and `grasp_axis` the
     resting-frame axis ("x" or "y") the fingers close along: the narrower one. Colorable kinds

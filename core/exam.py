@@ -54,11 +54,11 @@ import pyarrow.parquet as pq
 
 from core import __version__, contact, parquet, success, worlds
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, layout
+from core.products import ANSWERS_FILE, EXAM_PATH, TRIALS_FILE
 from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
 EXAM_VERSION = 2
-TRIALS_FILE, ANSWERS_FILE = "trials.parquet", "answers.parquet"
 NONSENSE = "xxx"
 FACES = {
     "task": "original instruction; success = the program's predicate on the original target",
@@ -181,7 +181,7 @@ def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
         },
         **meta,
     }
-    (root / "exam.json").write_text(json.dumps(header, indent=2, default=str))
+    (root / EXAM_PATH).write_text(json.dumps(header, indent=2, default=str))
 
 
 @dataclass
@@ -221,7 +221,7 @@ def read(root: Path | str) -> Exam:
     """Load and validate an exam folder; any problem raises ExamError with one line."""
     root = Path(root)
     try:
-        meta = json.loads((root / "exam.json").read_text())
+        meta = json.loads((root / EXAM_PATH).read_text())
     except FileNotFoundError:
         raise ExamError(f"{root} is not an exam: no exam.json") from None
     except (OSError, json.JSONDecodeError) as exc:

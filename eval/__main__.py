@@ -22,7 +22,7 @@ from core.exam import ExamError, read
 from core.layout import LIBERO
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
-from gen.cli import Failed, UserError, main
+from jobs.cli import Failed, UserError, main
 
 
 @dataclass
@@ -45,7 +45,7 @@ def check_out(out: Path, overwrite: bool) -> None:
     (as must its parent, where the rollouts are kept), and hold no report unless `overwrite`."""
     from eval.battery import REPORT_FILES
     from eval.report import check_out as check_report_out
-    from gen.config import check_writable
+    from jobs.output import check_writable
 
     check_report_out(out, overwrite, REPORT_FILES)
     check_writable(out, inside=True)

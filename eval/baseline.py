@@ -14,7 +14,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from core import __version__, cache_dir
-from core.exam import ANSWERS_FILE, TRIALS_FILE, Exam
+from core.exam import Exam
+from core.products import ANSWERS_FILE, TRIALS_FILE
 
 SHORTCUT = "position"  # the reference policy whose rates are the shortcut baseline
 

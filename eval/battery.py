@@ -27,17 +27,18 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
-from core.exam import Exam
+from core.exam import Exam, read
+from core.products import REPORTS, ROLLOUTS
+from core.spec import EpisodeSpec
 from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
 from eval.policies import Policy
 from eval.registry import make
-from eval.report import REPORTS, write_reports
-from eval.rollout import OurSim, Runner, make_sim, run_chunk
+from eval.report import write_reports
+from eval.rollout import OurSim, Runner, Sim
 from eval.score import BASELINE_MEASURED, POLICY_KEY, SIM_KEY, read_logs, score
-from gen.partial import Partial
-from gen.workers import die_with
+from jobs.partial import Partial
+from jobs.processes import die_with
 
-ROLLOUTS = "rollouts.parquet"
 REPORT_FILES = (*REPORTS, ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
 
 
@@ -123,6 +124,27 @@ def take(
             (partial.root / "report" / name).replace(out / name)
         partial.finish()
     return report, seconds
+
+
+def make_sim(name: str, exam: Exam) -> Sim:
+    """The simulator `name` (eval/libero_sim.py SIMS) for rollouts of `exam`."""
+    if name == OurSim.name:
+        return OurSim()
+    from eval.libero_sim import LiberoSim
+
+    specs = [EpisodeSpec.from_json(s) for s in exam.trials.drop_duplicates("trial")["spec"]]
+    return LiberoSim(exam.meta, specs)
+
+
+def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partial: Partial, sim: str, exam_root: Path) -> None:
+    """A worker process's share of an exam: its own policy, simulator and renderers; each rollout is
+    saved to the partial run as soon as it ends, so an interrupted take keeps it."""
+    runner = Runner(make(policy_name, **(options or {})), make_sim(sim, read(exam_root)))
+    try:
+        for _, row in rows.iterrows():
+            partial.save(int(row["row"]), runner.run(row).to_row())
+    finally:
+        runner.close()
 
 
 def _run(

@@ -34,11 +34,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from core import worlds
+from core import libero, worlds
 from core.exam import Exam
 from core.layout import IMAGE_PREFIX, STATE_KEY, TASK_KEY
 from core.spec import EpisodeSpec
-from core.worlds import libero
 from eval.rollout import SimError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -34,9 +34,9 @@ from typing import Protocol
 
 import numpy as np
 
-import referents
 from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
+from referents import registry
 
 
 @dataclass(frozen=True)
@@ -120,20 +120,20 @@ class Oracle(Scripted):
     def reset(self, context: Context) -> None:
         spec = context.spec
         asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
-        self._actions, self._t = self._plan(asked, referents.demo_of(spec.referent), context), 0
+        self._actions, self._t = self._plan(asked, registry.demo_of(spec.referent), context), 0
 
 
 class Position(Scripted):
     def __init__(self, name: str = "position") -> None:
         super().__init__(name)
 
-    def _chosen(self, referent: referents.Referent, context: Context) -> EpisodeSpec:
+    def _chosen(self, referent: registry.Referent, context: Context) -> EpisodeSpec:
         return referent.shortcut(context.spec)
 
     def reset(self, context: Context) -> None:
-        referent = referents.load(context.spec.referent, world=context.spec.sim.world)
+        referent = registry.load(context.spec.referent, world=context.spec.sim.world)
         chosen = self._chosen(referent, context)
-        plan = referents.pick_and_lift if chosen.task.program == "pick" else referent.demo
+        plan = registry.pick_and_lift if chosen.task.program == "pick" else referent.demo
         self._actions, self._t = self._plan(chosen, plan, context), 0
 
 
@@ -145,7 +145,7 @@ class NamedPlace(Position):
     def __init__(self) -> None:
         super().__init__("named_place")
 
-    def _chosen(self, referent: referents.Referent, context: Context) -> EpisodeSpec:
+    def _chosen(self, referent: registry.Referent, context: Context) -> EpisodeSpec:
         placed = referent.named_place(context.spec, context.target)
         return referent.shortcut(context.spec) if placed is None else placed
 

@@ -15,6 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from core.products import REPORTS
+
 FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense")
 
 
@@ -189,15 +191,12 @@ def html(report: dict) -> str:
     )
 
 
-REPORTS = ("report.json", "report.md", "report.html")  # what write_reports writes, all it ever replaces
-
-
 def check_out(out: Path, overwrite: bool, files: tuple[str, ...] = REPORTS) -> None:
     """Before any work: `out` must be a folder that can be written and hold none of `files` (a
     report) unless `overwrite`, which replaces exactly them: one rule for `python -m eval` and
     `python -m eval.score`."""
-    from gen.cli import UserError
-    from gen.config import check_writable, listed
+    from jobs.cli import UserError
+    from jobs.output import check_writable, listed
 
     if out.exists() and not out.is_dir():
         raise UserError(f"out={out} exists and is not a folder")

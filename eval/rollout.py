@@ -14,23 +14,17 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import numpy as np
 import pandas as pd
 
-from core.exam import Exam, read
 from core.layout import IMAGE_PREFIX, LAYOUTS, NATIVE, STATE_KEY, TASK_KEY, FeatureLayout
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
-from eval.registry import make
 from eval.score import SIM_SUCCESS
 from oracle.render import Cameras
 from oracle.scene import Scene, spec_scene
-
-if TYPE_CHECKING:
-    from gen.partial import Partial
 
 
 @dataclass
@@ -232,24 +226,3 @@ class Runner:
 
     def close(self) -> None:
         self.sim.close()
-
-
-def make_sim(name: str, exam: Exam) -> Sim:
-    """The simulator `name` (eval/libero_sim.py SIMS) for rollouts of `exam`."""
-    if name == OurSim.name:
-        return OurSim()
-    from eval.libero_sim import LiberoSim
-
-    specs = [EpisodeSpec.from_json(s) for s in exam.trials.drop_duplicates("trial")["spec"]]
-    return LiberoSim(exam.meta, specs)
-
-
-def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partial: Partial, sim: str, exam_root: Path) -> None:
-    """A worker process's share of an exam: its own policy, simulator and renderers; each rollout is
-    saved to the partial run as soon as it ends, so an interrupted take keeps it."""
-    runner = Runner(make(policy_name, **(options or {})), make_sim(sim, read(exam_root)))
-    try:
-        for _, row in rows.iterrows():
-            partial.save(int(row["row"]), runner.run(row).to_row())
-    finally:
-        runner.close()

@@ -65,7 +65,7 @@ from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
 from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline
-from gen.cli import UserError, main
+from jobs.cli import UserError, main
 
 # landing threshold (m) of each level, or None: the program achieved
 LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}

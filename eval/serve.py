@@ -17,7 +17,7 @@ import numpy as np
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from eval.policies import PolicyError
 from eval.registry import make
-from gen.cli import Failed, UserError, main
+from jobs.cli import Failed, UserError, main
 
 
 @dataclass

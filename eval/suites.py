@@ -22,14 +22,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from core import worlds
+from core import libero, worlds
 from core.exam import read
 from core.spec import FAST
-from core.worlds import libero
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
-from gen.canonical import CanonicalOptions, build, suite_of
-from gen.cli import UserError, main
+from gen.build.canonical import CanonicalOptions, build, suite_of
+from jobs.cli import UserError, main
 
 FACES = ("task", "obeyed_name", "true_target", "occ", "nonsense")
 PICTURE = "suites.png"

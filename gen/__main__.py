@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import sys
 
-from gen.cli import Failed, main
 from gen.config import GenConfig, validate
+from jobs.cli import Failed, main
 
 
 def generate(cfg: GenConfig) -> None:
     validate(cfg)
-    from gen.run import generate  # the simulator stack loads only for valid input
+    from gen.build.run import generate  # the simulator stack loads only for valid input
 
     try:
         summary = generate(cfg)
@@ -34,7 +34,7 @@ def _kept(cfg: GenConfig) -> str:
     """What an interrupted run leaves: the finished episodes its partial run keeps (gen/partial.py)."""
     from pathlib import Path
 
-    from gen.partial import Partial
+    from jobs.partial import Partial
 
     partial = Partial(Path(cfg.out or ""))
     kept = len(partial.saved()) if partial.items.is_dir() else 0

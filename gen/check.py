@@ -20,11 +20,12 @@ import av
 import numpy as np
 
 from core.layout import ACTION_KEY, STATE_KEY
-from gen import scenes
-from gen.cli import Failed, UserError, main
-from gen.config import product_in
-from gen.lerobot_reader import INFO_PATH, LeRobotReader
-from gen.stats import vector_stats
+from core.products import INFO_PATH
+from gen.build import scenes
+from gen.lerobot.reader import LeRobotReader
+from gen.lerobot.stats import vector_stats
+from jobs.cli import Failed, UserError, main
+from jobs.output import product_in
 
 
 class Broken(Exception):

@@ -6,33 +6,24 @@ naming it; the CLI prints that line and exits non-zero before anything is writte
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, List, Optional
 
-import referents
 from core import worlds
-from core.exam import ANSWERS_FILE, EXAM_FORMAT, TRIALS_FILE
 from core.layout import FeatureLayout, layout
 from core.spec import FAST, LOOKS
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
-from gen import mix
-from gen.cli import UserError, compose_config
-from gen.partial import GENERATION_PATH, completed
-from gen.scenes import SCENES_PATH
-from gen.video import CODECS
-from referents import Referent, UnknownReferent
+from gen.lerobot.video import CODECS
+from gen.planning import mix
+from jobs.cli import UserError, compose_config
+from jobs.output import check_output
+from jobs.partial import completed
+from referents import registry
+from referents.registry import Referent, UnknownReferent
 from referents.schema import ReferentSpecError
-
-DATASET_ENTRIES = {"meta", "data", "videos", "README.md", "preview.png", "images"}  # a dataset folder's own names
-EXAM_ENTRIES = {"exam.json", TRIALS_FILE, ANSWERS_FILE, "README.md"}  # an exam folder's own names
-EXPORT_ENTRIES = {"meta", "data", "videos"}  # a v2.1 export's own names (gen/export.py)
-PRODUCT_ENTRIES = {"dataset": DATASET_ENTRIES, "plan": DATASET_ENTRIES, "exam": EXAM_ENTRIES, "export": EXPORT_ENTRIES}
-PRODUCTS = ("dataset", "plan", "exam", "export")  # what this project writes and `overwrite=true` may replace
 
 
 @dataclass
@@ -60,7 +51,7 @@ class GenConfig:
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
-    world: Optional[str] = None  # native, libero_object, libero_spatial, libero_goal: one carrying the type; default its own
+    world: Optional[str] = None  # native, libero_goal, libero_object, libero_spatial: one carrying the type; default its own
     look: str = FAST  # fast | full: every mesh whole and reflections, as the world's own simulator draws (core/spec.py)
 
     def spec_overrides(self) -> dict:
@@ -80,7 +71,7 @@ class GenConfig:
             return [self]
         shares = []
         for item in self.referent:
-            name, world = referents.own_name(*mix.split(item))  # `object@libero_object` is libero_object
+            name, world = registry.own_name(*mix.split(item))  # `object@libero_object` is libero_object
             shares.append(replace(self, referent=name, world=world or self.world, n=self.n // len(self.referent)))
         return shares
 
@@ -143,7 +134,7 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"objects_per_scene must be at least 2 (a swap needs another object), got {cfg.objects_per_scene}")
     load_referent(cfg)  # the spec's own problems come before any about out=
     if cfg.out is None:
-        name = cfg.referent if cfg.world == referents.world_of(cfg.referent, cfg.spec) else f"{cfg.referent}-{cfg.world}"
+        name = cfg.referent if cfg.world == registry.world_of(cfg.referent, cfg.spec) else f"{cfg.referent}-{cfg.world}"
         cfg.out = str(Path("datasets") / (name if cfg.split == "train" else f"{name}-exam"))
     try:
         if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/run.py)
@@ -174,7 +165,7 @@ def _validate_mix(cfg: GenConfig) -> None:
     mix.check_share(cfg.n, names)
     shares = cfg.shares()
     if cfg.out is None:  # named as the progress bar names the types (`object@libero_object` is libero_object)
-        own = [s.world in (None, referents.world_of(s.referent)) for s in shares]
+        own = [s.world in (None, registry.world_of(s.referent)) for s in shares]
         cfg.out = str(Path("datasets") / mix.name([s.referent if o else f"{s.referent}@{s.world}" for s, o in zip(shares, own)]))
         shares = cfg.shares()
     for item, share in zip(names, shares):
@@ -262,7 +253,7 @@ def check_seed(seed: int) -> None:
 def load_referent(cfg: GenConfig) -> Referent:
     """The run's referent, its spec validated with the run's overrides."""
     try:
-        return referents.load(cfg.referent, cfg.spec, cfg.spec_overrides(), cfg.world)
+        return registry.load(cfg.referent, cfg.spec, cfg.spec_overrides(), cfg.world)
     except UnknownReferent as exc:
         raise UserError(str(exc)) from None
     except ReferentSpecError as exc:
@@ -277,13 +268,13 @@ def _blame_objects_per_scene(cfg: GenConfig, exc: ReferentSpecError) -> str | No
         return None
     overrides = {**cfg.spec_overrides(), "objects_per_scene": None}
     try:
-        own = referents.load(cfg.referent, cfg.spec, overrides, cfg.world)
+        own = registry.load(cfg.referent, cfg.spec, overrides, cfg.world)
     except (UnknownReferent, ReferentSpecError):
         return None
     accepted = []
     for k in range(2, len(own.config.layout.slots) + 1):
         try:
-            referents.load(cfg.referent, cfg.spec, {**overrides, "objects_per_scene": k}, cfg.world)
+            registry.load(cfg.referent, cfg.spec, {**overrides, "objects_per_scene": k}, cfg.world)
             accepted.append(k)
         except ReferentSpecError:
             pass
@@ -297,24 +288,24 @@ def _blame_objects_per_scene(cfg: GenConfig, exc: ReferentSpecError) -> str | No
 
 def resolve_world(cfg: GenConfig) -> worlds.World:
     """The world a run's scenes happen in: the referent's own, or one `world=` names that carries
-    it (referents.worlds_of); its files must be installed."""
-    if cfg.spec is None and cfg.referent not in referents.available():
-        raise UserError(f"unknown referent {cfg.referent!r}; available: {', '.join(referents.available())}")
+    it (registry.worlds_of); its files must be installed."""
+    if cfg.spec is None and cfg.referent not in registry.available():
+        raise UserError(f"unknown referent {cfg.referent!r}; available: {', '.join(registry.available())}")
     if cfg.spec is not None and not Path(cfg.spec).is_file():
         raise UserError(f"spec={cfg.spec}: no such file")
-    home = referents.world_of(cfg.referent, cfg.spec)
+    home = registry.world_of(cfg.referent, cfg.spec)
     try:
         world = worlds.world(cfg.world or home)
     except worlds.UnknownWorld as exc:
         raise UserError(str(exc)) from None
     if world.name != home:
-        others = ", ".join(referents.carried_by(world.name)) or "none yet"
+        others = ", ".join(registry.carried_by(world.name)) or "none yet"
         if cfg.spec:
             raise UserError(
                 f"spec={cfg.spec} lays out scenes in world {home}, not {world.name}: leave world= out (or world={home}); "
                 f"types world {world.name} carries: {others}"
             )
-        carriers = referents.worlds_of(cfg.referent)
+        carriers = registry.worlds_of(cfg.referent)
         if world.name not in carriers:
             raise UserError(
                 f"referent {cfg.referent} has no design in world {world.name}; worlds that carry {cfg.referent}: "
@@ -326,91 +317,3 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
         raise UserError(f"world={world.name}: {exc}") from None
     cfg.world = world.name
     return world
-
-
-def check_output(out: Path, overwrite: bool, replaces: tuple[str, ...] = PRODUCTS) -> None:
-    """`out` must be creatable and writable, and empty unless `overwrite`, which replaces only a
-    folder this project wrote, of a kind in `replaces` (a dataset, a plan, an exam, an export): a
-    product is published by renaming it to `out`, so `out` can be neither a folder of someone
-    else's files nor the current one.
-
-    A product folder that also holds files this project did not write is refused even with
-    `overwrite`: replacing the folder would delete them.
-    """
-    if out.exists() and not out.is_dir():
-        raise UserError(f"out={out} exists and is not a folder")
-    here = Path.cwd().resolve()
-    if out.resolve() == here or out.resolve() in here.parents:
-        raise UserError(f"out={out} is the current folder (or holds it), which cannot be replaced; choose a folder inside it")
-    if out.is_dir() and any(out.iterdir()):
-        if not overwrite:
-            raise UserError(f"out={out} is not empty; pass overwrite=true to replace it")
-        found = sorted(p.name for p in out.iterdir())
-        product = product_in(out)
-        kinds = _a(" or ".join(", ".join(replaces).rsplit(", ", 1)))
-        if product is None:
-            raise UserError(
-                f"out={out} holds files this project did not write ({listed(found)}); overwrite=true replaces only {kinds} "
-                "made here: choose another out"
-            )
-        if product not in replaces:
-            raise UserError(f"out={out} holds {_a(product)} made here; overwrite=true replaces only {kinds}: choose another out")
-        strays = [name for name in found if name not in PRODUCT_ENTRIES[product]]
-        if strays:  # e.g. an eval report kept inside its exam: replacing the exam would delete it
-            raise UserError(
-                f"out={out} holds {_a(product)} made here and files this project did not write ({listed(strays)}), "
-                "which overwrite=true would delete: move them out of it, or choose another out"
-            )
-    check_writable(out)
-
-
-def _a(words: str) -> str:
-    return f"{'an' if words[:1] in 'aeiou' else 'a'} {words}"
-
-
-def check_writable(out: Path, inside: bool = False) -> None:
-    """Refuse an `out` that cannot be made (with `inside`: written into): a folder is created (and
-    removed) beside it (in it), since permission bits alone say nothing for root or on read-only mounts."""
-    parent = out.resolve() if inside else out.resolve().parent
-    while not parent.exists():
-        parent = parent.parent
-    try:
-        os.rmdir(tempfile.mkdtemp(prefix=".deconfound-write-test-", dir=parent))
-    except OSError as exc:
-        raise UserError(f"out={out} is not writable ({exc.strerror or exc} in {parent})") from None
-
-
-def listed(names: list[str]) -> str:
-    """The first few of `names`, for a one-line message."""
-    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-
-
-def product_in(folder: Path) -> str | None:
-    """What this project wrote in `folder` ("dataset", "plan", "exam", "export"), or None if it
-    holds anything else: a finished or partially assembled dataset or plan (LeRobot's meta files
-    and our scene records), an exam (exam.json of our format), or a LeRobot v2.1 export of one of
-    our datasets (gen/export.py: v2.1's info.json beside our generation record)."""
-    try:
-        generation = json.loads((folder / GENERATION_PATH).read_text())
-        if generation.get("generator") == "deconfound":
-            if _codebase_version(folder) == "v2.1":
-                return "export"
-            return "plan" if generation.get("plan_only") else "dataset"
-    except (OSError, ValueError, AttributeError):
-        pass
-    try:
-        if json.loads((folder / "exam.json").read_text()).get("format") == EXAM_FORMAT:
-            return "exam"
-    except (OSError, ValueError, AttributeError):
-        pass
-    if (folder / SCENES_PATH).is_file() and {p.name for p in folder.iterdir()} <= DATASET_ENTRIES:
-        return "dataset"
-    return None
-
-
-def _codebase_version(folder: Path) -> str | None:
-    """The LeRobot format a folder's meta/info.json names, if it has one."""
-    try:
-        return json.loads((folder / "meta/info.json").read_text()).get("codebase_version")
-    except (OSError, ValueError, AttributeError):
-        return None

@@ -13,28 +13,17 @@ and moved into place when whole, so an interrupted export leaves nothing half-wr
 
 from __future__ import annotations
 
-import json
 import shutil
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-import pyarrow.compute as pc
-import pyarrow.parquet as pq
-from tqdm import tqdm
-
 from gen.check import Broken, check
-from gen.cli import Failed, UserError, main
-from gen.config import check_output
-from gen.lerobot_reader import INFO_PATH, LeRobotReader
-from gen.video import cut
+from gen.lerobot.v21 import export_v21
+from jobs.cli import UserError, main
+from jobs.output import check_output
 
 FORMATS = ("v2.1",)
-CHUNKS_SIZE = 1000  # episodes per chunk folder, as lerobot v2.1 writes them
-DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"
-VIDEO_PATH = "videos/chunk-{episode_chunk:03d}/{video_key}/episode_{episode_index:06d}.mp4"
-V21_STATS = ("min", "max", "mean", "std", "count")  # v3.0 adds quantiles, which v2.1 readers do not expect
 
 
 @dataclass
@@ -43,71 +32,6 @@ class ExportOptions:
     format: str = "v2.1"  # v2.1: per-episode files and JSON-lines metadata (openpi, lerobot < 0.4)
     out: str = ""  # the new dataset's folder; must not exist unless overwrite=true
     overwrite: bool = False  # replace an earlier export at out (a dataset, or a folder with other files, is refused)
-
-
-def _stats(row: dict, features: list[str]) -> dict:
-    """An episode's v2.1 stats from its v3.0 episodes-table row (nested lists, as jsonl holds them)."""
-    out = {}
-    for key in features:
-        out[key] = {s: np.stack(_nested(row[f"stats/{key}/{s}"])).tolist() for s in V21_STATS if f"stats/{key}/{s}" in row}
-    return out
-
-
-def _nested(value: object) -> object:
-    """A parquet cell of arrays of arrays -> one numpy array."""
-    if isinstance(value, np.ndarray) and value.dtype == object:
-        return np.stack([_nested(v) for v in value])
-    return np.asarray(value)
-
-
-def export_v21(source: Path, staging: Path) -> dict:
-    """Write the v2.1 dataset of `source` into `staging`; returns its info.json."""
-    reader = LeRobotReader(source)
-    info, episodes = reader.info, reader.episodes
-    table = pq.read_table(source / "data").sort_by("index")
-    meta = staging / "meta"
-    meta.mkdir(parents=True)
-    stats_features = [k for k in info["features"] if f"stats/{k}/mean" in episodes.columns]
-    with (meta / "episodes.jsonl").open("w") as eps, (meta / "episodes_stats.jsonl").open("w") as stats:
-        for row in tqdm(episodes.to_dict("records"), desc="export v2.1", unit="episode"):
-            ep, chunk = int(row["episode_index"]), int(row["episode_index"]) // CHUNKS_SIZE
-            frames = table.slice(int(row["dataset_from_index"]), int(row["length"]))  # the table is in index order
-            if pc.any(pc.not_equal(frames["episode_index"], ep)).as_py() or len(frames) != int(row["length"]):
-                raise Failed(f"{source}: rows {row['dataset_from_index']}.. are not all of episode {ep}'s {row['length']}")
-            path = staging / DATA_PATH.format(episode_chunk=chunk, episode_index=ep)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            pq.write_table(frames.replace_schema_metadata(None), path)
-            for camera, key in zip(reader.cameras, reader.video_keys):
-                span = reader.span(ep, camera, row)
-                target = staging / VIDEO_PATH.format(episode_chunk=chunk, video_key=key, episode_index=ep)
-                if cut(span.path, span.first, span.length, reader.fps, target) != span.length:
-                    raise Failed(f"{span.path}: episode {ep} does not hold {span.length} frames from frame {span.first}")
-            eps.write(json.dumps({"episode_index": ep, "tasks": list(row["tasks"]), "length": int(row["length"])}) + "\n")
-            stats.write(json.dumps({"episode_index": ep, "stats": _stats(row, stats_features)}) + "\n")
-    with (meta / "tasks.jsonl").open("w") as tasks:
-        for task, index in reader.tasks["task_index"].sort_values().items():
-            tasks.write(json.dumps({"task_index": int(index), "task": task}) + "\n")
-    for extra in ("scenes.parquet", "generation.json", "audit.json"):  # our own records travel along
-        if (source / "meta" / extra).is_file():
-            shutil.copy2(source / "meta" / extra, meta / extra)
-    n = len(episodes)
-    v21 = {
-        "codebase_version": "v2.1",
-        "robot_type": info.get("robot_type"),
-        "total_episodes": n,
-        "total_frames": info["total_frames"],
-        "total_tasks": info["total_tasks"],
-        "total_videos": n * len(reader.video_keys),
-        "total_chunks": (n + CHUNKS_SIZE - 1) // CHUNKS_SIZE,
-        "chunks_size": CHUNKS_SIZE,
-        "fps": info["fps"],
-        "splits": info["splits"],
-        "data_path": DATA_PATH,
-        "video_path": VIDEO_PATH,
-        "features": info["features"],
-    }
-    (staging / INFO_PATH).write_text(json.dumps(v21, indent=4))
-    return v21
 
 
 def export(options: ExportOptions) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import urlparse
 
-from gen.cli import Failed, UserError, main
+from jobs.cli import Failed, UserError, main
 
 if TYPE_CHECKING:
     from huggingface_hub import HfApi

@@ -18,9 +18,9 @@ import numpy as np
 
 from core.layout import ACTION_KEY, STATE_KEY
 from core.spec import EpisodeSpec
-from gen import scenes
-from gen.cli import Failed, UserError, main
-from gen.lerobot_reader import LeRobotReader
+from gen.build import scenes
+from gen.lerobot.reader import LeRobotReader
+from jobs.cli import Failed, UserError, main
 
 FRAME_TOLERANCE = 3.0  # mean |difference| per frame, in 0..255 units
 
@@ -31,9 +31,9 @@ class Mismatch(Exception):
 
 def verify(root: Path, sample: int = 3) -> list[int]:
     """Raises Mismatch on the first difference; returns the episodes checked."""
-    import referents
-    from gen.produce import Producer
+    from gen.build.produce import Producer
     from oracle.episode import demonstrate
+    from referents import registry
 
     dataset = LeRobotReader(root)
     records = scenes.read(root).sort_values("episode_index").reset_index(drop=True)
@@ -47,7 +47,7 @@ def verify(root: Path, sample: int = 3) -> list[int]:
         if key not in producers:
             producers[key] = Producer(None, spec.sim, assets=spec.assets)
         producer = producers[key]
-        demo = demonstrate(producer.scene, producer.ik, spec, referents.demo_of(spec.referent))
+        demo = demonstrate(producer.scene, producer.ik, spec, registry.demo_of(spec.referent))
         rows = data[data.episode_index == ep].sort_values("frame_index")
         if not demo.success:
             raise Mismatch(f"episode {ep}: its spec no longer yields a successful demo")

@@ -69,7 +69,7 @@ def _robot(world: worlds.World) -> Panda:
 
 def _build_object(kind: catalog.Kind, name: str) -> rs_objects.MujocoObject:
     if kind.model == "libero":  # LIBERO's model file, loaded as LIBERO's objects load it (envs/objects/*.py)
-        from core.worlds import libero
+        from core import libero
 
         return rs_objects.MujocoXMLObject(
             str(libero.assets_root() / kind.params["xml"]),
@@ -83,7 +83,7 @@ def _build_object(kind: catalog.Kind, name: str) -> rs_objects.MujocoObject:
 
 def libero_folder(kind: catalog.Kind) -> Path:
     """The folder of a LIBERO kind's model file."""
-    from core.worlds import libero
+    from core import libero
 
     return (libero.assets_root() / kind.params["xml"]).parent
 
@@ -91,7 +91,7 @@ def libero_folder(kind: catalog.Kind) -> Path:
 def _libero_arena(world: worlds.World) -> Arena:
     """LIBERO's arena file with its floor and wall textures (LIBERO's EmptyArena, or its TableArena
     where the world has a table), its cameras set as the world's problem class sets them."""
-    from core.worlds import libero
+    from core import libero
 
     scene = str(libero.assets_root() / world.arena["scene"])
     if world.table is None:
@@ -110,7 +110,7 @@ def _libero_arena(world: worlds.World) -> Arena:
 
 def _fixture(placed: worlds.Placed) -> rs_objects.MujocoObject:
     """A world's fixture as LIBERO loads it (no free joint), its body where the world puts it."""
-    from core.worlds import libero
+    from core import libero
 
     fixture = rs_objects.MujocoXMLObject(
         str(libero.assets_root() / placed.fixture.xml),

@@ -24,8 +24,8 @@ import numpy as np
 
 from core import worlds
 from core.demo import Plan, Skills
+from core.libero import Problem
 from core.spec import EpisodeSpec, TaskSpec
-from core.worlds.libero import Problem
 from referents import destination
 from referents.balance import Balance
 from referents.design import Design

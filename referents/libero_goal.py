@@ -12,9 +12,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from core import worlds
+from core import libero, worlds
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from core.worlds import libero
 from referents import scenery
 from referents.balance import Balance
 from referents.compose import slug

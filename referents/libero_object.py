@@ -14,9 +14,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from core import worlds
+from core import libero, worlds
 from core.spec import Counterfactual, EpisodeSpec, TaskSpec
-from core.worlds import libero
 from referents import destination, scenery
 from referents.balance import Balance
 from referents.compose import fill, naming_design

@@ -16,9 +16,8 @@ from itertools import combinations
 
 import numpy as np
 
-from core import worlds
+from core import libero, worlds
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from core.worlds import libero
 from referents import scenery
 from referents.balance import Balance
 from referents.design import Design, Placement

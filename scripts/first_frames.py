@@ -16,7 +16,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gen.cli import UserError, main  # noqa: E402
+from jobs.cli import UserError, main  # noqa: E402
 
 LABEL_HEIGHT = 44  # pixels under each frame for the type, its world and the instruction
 
@@ -32,8 +32,8 @@ def picture(options: FirstFramesOptions) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
     from PIL import Image, ImageDraw
 
-    from gen import scenes
-    from gen.partial import completed
+    from gen.build import scenes
+    from jobs.partial import completed
 
     root = Path(options.dataset)
     if completed(root) is None:

@@ -59,15 +59,14 @@ def our_frames(
     """Our frames of both cameras (`<task>-<state>-<camera>`) at LIBERO's states, the fixtures posed
     as LIBERO drew them, and (`labels`) what each pixel shows (`-labels`); drawn with `look`, or as
     a revision before looks drew them (None)."""
-    import referents
-    from core import worlds
+    from core import libero, worlds
     from core.layout import LIBERO
-    from core.worlds import libero
-    from gen.plan import default_sim
+    from gen.planning.plan import default_sim
     from oracle.render import Cameras
     from oracle.scene import scene_for
+    from referents import registry
 
-    world, referent = worlds.world(world_name), referents.load(world_name)
+    world, referent = worlds.world(world_name), registry.load(world_name)
     scene = scene_for(referent.assets(), "libero", world.name, *([look] if look else []))
     cameras, out = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), {}
     for task, state in cases:
@@ -87,7 +86,7 @@ def _load(scene, referent, world, task: str, state: int, sim) -> None:  # noqa: 
     referent and a world (revisions before LIBERO-PRO's suites)."""
     import inspect
 
-    from gen import canonical
+    from gen.build import canonical
 
     if "suite" in inspect.signature(canonical.load_state).parameters:
         suite = canonical.suite_of(canonical.CanonicalOptions(world=world.name))
@@ -172,6 +171,6 @@ if __name__ == "__main__":
     if sys.argv[1:2] == ["frames"]:
         _frames(*sys.argv[2:5])
         sys.exit(0)
-    from gen.cli import main
+    from jobs.cli import main
 
     sys.exit(main("python scripts/libero_objects_side_by_side.py", ObjectsOptions, picture, doc=__doc__))

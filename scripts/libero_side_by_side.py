@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from gen.cli import UserError, main  # noqa: E402
+from jobs.cli import UserError, main  # noqa: E402
 
 
 @dataclass

@@ -12,13 +12,14 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from core import libero
 from core.layout import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
-from core.worlds import World, libero
-from gen.canonical import CanonicalOptions, Suite, load_state, suite_of
+from core.worlds import World
+from gen.build.canonical import CanonicalOptions, Suite, load_state, suite_of
+from gen.build.run import generate
 from gen.config import parse
-from gen.plan import world_sim
-from gen.run import generate
+from gen.planning.plan import world_sim
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -156,7 +157,7 @@ def canonical_reports(out: Path, trials: dict[str, int], world: str = "libero_ob
     from core.exam import read
     from eval.battery import take
     from eval.registry import make
-    from gen.canonical import CanonicalOptions, build
+    from gen.build.canonical import CanonicalOptions, build
 
     build(CanonicalOptions(world=world, states=1, image_size=32, out=str(out / "canonical")))
     exam = read(out / "canonical")
@@ -174,8 +175,8 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     with fixtures replays in its suite's own scene, the fixtures where the records stand them. A
     dataset mixing worlds (gen/mix.py) gives the episodes of `world`."""
     from core.layout import ACTION_KEY
-    from gen import scenes
-    from gen.lerobot_reader import LeRobotReader
+    from gen.build import scenes
+    from gen.lerobot.reader import LeRobotReader
 
     reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.is_site}
     records = scenes.read(dataset)

@@ -14,16 +14,16 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-import referents
 from core import parquet
 from core.spec import EpisodeSpec
 from core.success import Outcome, succeeded
-from gen import scenes
+from gen.build import scenes
 from helpers import make_dataset
 from oracle.scene import scene_for
+from referents import registry
 
 
-@pytest.fixture(scope="module", params=referents.of_world("native"))
+@pytest.fixture(scope="module", params=registry.of_world("native"))
 def dataset(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("axes") / request.param
     return make_dataset(out, f"referent={request.param}", "n=24", "image_size=64", "seed=2")

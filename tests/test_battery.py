@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import referents
 from core import parquet
 from core.exam import read
 from core.spec import SimSettings
@@ -22,9 +21,10 @@ from eval.battery import take
 from eval.policies import Context, PolicyError
 from eval.registry import make, names, register
 from eval.rollout import Runner
-from gen import scenes
-from gen.plan import plan
+from gen.build import scenes
+from gen.planning.plan import plan
 from helpers import make_dataset
+from referents import registry
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +37,7 @@ def small_exam(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_exam_scenes_never_occur_in_training(small_exam: Path, object_dataset: Path) -> None:
     exam_hashes = set(parquet.read(small_exam / "answers.parquet")["scene_hash"])
     assert exam_hashes.isdisjoint(set(scenes.read(object_dataset)["scene_hash"]))
-    ref = referents.load("object")
+    ref = registry.load("object")
     train = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings())}
     held_out = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings(), split="exam")}
     assert train.isdisjoint(held_out)
@@ -226,11 +226,11 @@ def test_a_verb_exams_horizon_does_not_tell_the_program(tmp_path: Path) -> None:
     """Every row of a trial runs under one horizon, long enough for the longest of its programs:
     the oracle's demonstration of any row's ask fits in it with the usual margin."""
     from core.spec import EpisodeSpec
-    from gen.exam import HORIZON_FACTOR, HORIZON_SLACK
+    from gen.build.exam import HORIZON_FACTOR, HORIZON_SLACK
     from oracle.episode import demonstrate
     from oracle.ik import ArmIK
     from oracle.scene import scene_for
-    from referents import demo_of
+    from referents.registry import demo_of
 
     exam = read(make_dataset(tmp_path / "verb-exam", "referent=verb", "n=4", "split=exam", "seed=2", "image_size=32"))
     assert (exam.trials.groupby("trial")["max_steps"].nunique() == 1).all()

@@ -13,18 +13,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import referents
 from core import contact, worlds
 from core.exam import Exam, trial_rows
 from core.spec import EpisodeSpec
 from eval.score import score
-from gen.plan import default_sim, plan
+from gen.planning.plan import default_sim, plan
+from referents import registry
 
-CASES = [(name, world) for name in referents.available() for world in referents.worlds_of(name)]
+CASES = [(name, world) for name in registry.available() for world in registry.worlds_of(name)]
 
 
 def _exam(name: str, world: str) -> tuple[Exam, list[EpisodeSpec]]:
-    referent = referents.load(name, world=world)
+    referent = registry.load(name, world=world)
     specs = plan(referent, 3, seed=0, sim=default_sim(referent), split="exam")
     rows: list[dict] = []
     for trial, spec in enumerate(specs):
@@ -70,7 +70,7 @@ def test_chance_is_one_over_what_the_hand_can_land_on(name: str, world: str) -> 
 
 
 @pytest.mark.fast
-@pytest.mark.parametrize("world", referents.worlds_of("negation"))
+@pytest.mark.parametrize("world", registry.worlds_of("negation"))
 def test_a_landing_on_the_object_no_swap_names_is_a_distractors(world: str) -> None:
     """Negation's fourth object (the other shape in the other color) is never an alternative: a hand
     that goes there went to a distractor, and the report's chance counts it."""

@@ -42,7 +42,7 @@ def _untouched(out: Path) -> bool:
         (["codec=mpeg2"], "codec must be one of"),
         (["profile=openvla"], "unknown profile 'openvla'; known: native, libero"),
         (["n"], "key=value"),
-        (["world=mars"], "unknown world 'mars'; known: native, libero_object, libero_spatial, libero_goal"),
+        (["world=mars"], "unknown world 'mars'; known: native, libero_goal, libero_object, libero_spatial"),
         (["n=2", "n=3"], "option 'n' is given twice (n=2 and n=3); give it once"),
         (["objects_per_scene=1"], "objects_per_scene must be at least 2 (a swap needs another object), got 1"),
         (["holdout=[milk carton,soda can,bottle,bread,cereal box,lemon]"], "holdout: holds out every object"),
@@ -250,9 +250,9 @@ def test_a_large_plan_shows_its_progress(tmp_path: Path) -> None:
 def test_help_says_where_an_exam_goes_by_default() -> None:
     shown = run_gen("--help")
     assert "default datasets/<referent>, or datasets/<referent>-<world> in another world (exam: ...-exam)" in shown.stdout
-    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    options = (Path(__file__).resolve().parent.parent / "docs" / "GENERATE.md").read_text()
     row = "`datasets/<referent>`, `datasets/<referent>-<world>` in another world than its own (`-exam` added with `split=exam`)"
-    assert row in readme
+    assert row in options
 
 
 def test_the_multi_axis_parts_make_only_the_sets_they_use() -> None:
@@ -295,7 +295,7 @@ def test_a_list_option_takes_a_bare_value_as_a_one_item_list(tmp_path: Path) -> 
         assert result.returncode == 0, result.stderr
         assert json.loads((out / "meta/generation.json").read_text())["config"]["holdout"] == held
     from eval.suites import SuitesOptions
-    from gen.cli import parse
+    from jobs.cli import parse
 
     assert parse("python -m eval.suites", SuitesOptions, ["policy=position", "suites=all"]).suites == ["all"]
 
@@ -307,13 +307,13 @@ def test_a_missing_spec_file_is_named_as_missing(tmp_path: Path) -> None:
 
 
 def test_a_world_that_cannot_carry_a_type_lists_every_type_it_carries(tmp_path: Path) -> None:
-    import referents
+    from referents import registry
 
     result = run_gen("referent=ordinal", "world=libero_spatial", "plan_only=true", f"out={tmp_path / 'plan'}")
     line = result.stderr.strip()
     assert result.returncode == 2 and "types world libero_spatial carries: " in line, line
     carried = line.split("types world libero_spatial carries: ")[1].rstrip(")").split(", ")
-    assert {"color", "relation"} <= set(carried) == set(referents.carried_by("libero_spatial"))
+    assert {"color", "relation"} <= set(carried) == set(registry.carried_by("libero_spatial"))
 
 
 @pytest.mark.parametrize("command", ["eval", "eval.suites"])

@@ -15,8 +15,8 @@ import pytest
 
 from eval.__main__ import EvalOptions, evaluate
 from eval.registry import make, register
-from gen.cli import main
 from helpers import make_dataset
+from jobs.cli import main
 
 REPORT = ("report.json", "rollouts.parquet")
 

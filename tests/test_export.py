@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gen.lerobot_reader import LeRobotReader
+from gen.lerobot.reader import LeRobotReader
 
 ROOT = Path(__file__).resolve().parent.parent
 V21_PYTHON = ROOT / ".venv-v21" / "bin" / "python"

@@ -11,12 +11,12 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import referents
 from core.spec import SimSettings
-from gen.audit import audit
-from gen.cli import UserError
 from gen.config import GenConfig, parse
-from gen.plan import designs, realize
+from gen.planning.audit import audit
+from gen.planning.plan import designs, realize
+from jobs.cli import UserError
+from referents import registry
 from referents.schema import ReferentSpecError
 
 FUZZ = settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -45,7 +45,7 @@ def test_any_option_line_parses_or_fails_in_one_line(tmp_path: Path, argv: list[
         os.chdir(cwd)
 
 
-BASES = {name: yaml.safe_load((referents.HERE / f"{name}.yaml").read_text()) for name in referents.available()}
+BASES = {name: yaml.safe_load((registry.HERE / f"{name}.yaml").read_text()) for name in registry.available()}
 JUNK = st.one_of(
     st.none(),
     st.integers(-5, 50),
@@ -79,10 +79,10 @@ def test_any_spec_file_plans_or_fails_naming_the_file(tmp_path: Path, spec: dict
     path = tmp_path / "spec.yaml"
     path.write_text(yaml.safe_dump(spec))
     try:
-        ref = referents.load("unused", str(path))
+        ref = registry.load("unused", str(path))
         plan = designs(ref, 6, seed=0)
         audit(ref, [realize(ref, d, i, 0, SimSettings(world=ref.config.world)) for i, d in enumerate(plan)])
-    except (ReferentSpecError, referents.UnknownReferent) as exc:
+    except (ReferentSpecError, registry.UnknownReferent) as exc:
         assert str(exc).startswith(str(path)) or "referent" in str(exc)
         assert "\n" not in str(exc).strip()
 
@@ -92,4 +92,4 @@ def test_unreadable_spec_text(tmp_path: Path, text: str) -> None:
     path = tmp_path / "spec.yaml"
     path.write_text(text)
     with pytest.raises(ReferentSpecError):
-        referents.load("color", str(path))
+        registry.load("color", str(path))

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
-import referents
 from core.exam import read
 from core.layout import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
 from core.spec import EpisodeSpec, SimSettings
@@ -22,13 +21,14 @@ from eval.battery import take
 from eval.env import ExamEnv
 from eval.registry import make
 from eval.rollout import ProfileMismatch, Runner
-from gen import scenes
-from gen.lerobot_reader import LeRobotReader
-from gen.plan import plan
+from gen.build import scenes
+from gen.lerobot.reader import LeRobotReader
+from gen.planning.plan import plan
 from helpers import body_image, make_dataset
 from oracle.episode import replay
 from oracle.render import Cameras
 from oracle.scene import scene_for
+from referents import registry
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_frames_are_mirrored_as_in_lerobots_libero_datasets() -> None:
     """lerobot's LIBERO datasets hold robosuite's (upside-down, OpenGL) frames turned 180
     degrees: upright, mirrored left to right. An object on the robot's left (+y), which an
     upright agentview shows on the right, must be on the left of a libero frame."""
-    ref = referents.load("object")
+    ref = registry.load("object")
     spec = plan(ref, 1, seed=0, sim=SimSettings(image_size=64))[0]
     left = max(spec.objects, key=lambda o: o.pos[1])
     frames = {}

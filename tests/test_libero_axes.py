@@ -20,19 +20,19 @@ import numpy as np
 import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
 
-import referents
 from core import worlds
 from core.exam import read
 from core.layout import LIBERO
 from core.spec import EpisodeSpec
 from eval.battery import take
 from eval.registry import make
-from gen import scenes
-from gen.audit import audit
-from gen.plan import default_sim, plan
+from gen.build import scenes
+from gen.planning.audit import audit
+from gen.planning.plan import default_sim, plan
 from helpers import PICTURE_STATES, Pictures, liberos_own, liberos_replay, make_dataset
 from oracle.render import Cameras
 from oracle.scene import scene_for
+from referents import registry
 
 AXES = {"category": "libero_object", "negation": "libero_object", "composition": "libero_object", "ordinal": "libero_object"}
 AXES |= {"color": "libero_spatial"}
@@ -52,7 +52,7 @@ def test_each_axis_is_its_types_own_design_in_a_liberos_scene(name: str) -> None
     objects; every value of the naming variable is asked for equally often, every target goes to
     the world's destination, and the audit of 60 planned episodes finds no leak."""
     world = AXES[name]
-    referent = referents.load(name, world=world)
+    referent = registry.load(name, world=world)
     assert referent.name == name and referent.config.world == world and referent.label == f"{name}@{world}"
     specs = plan(referent, 60, 0, default_sim(referent))
     kinds = worlds.world(world).kinds
@@ -71,9 +71,9 @@ def test_the_axis_a_liberos_type_is_is_that_type() -> None:
     """`referent=object world=libero_object` is what `referent=libero_object` makes (and relation,
     goal: LIBERO-Spatial's and LIBERO-Goal's types)."""
     for axis, own in (("object", "libero_object"), ("relation", "libero_spatial"), ("goal", "libero_goal")):
-        alias, itself = referents.load(axis, world=own), referents.load(own)
+        alias, itself = registry.load(axis, world=own), registry.load(own)
         assert plan(alias, 12, 3, default_sim(alias)) == plan(itself, 12, 3, default_sim(itself))
-        assert referents.own_name(axis, own) == (own, None)
+        assert registry.own_name(axis, own) == (own, None)
 
 
 @pytest.mark.fast
@@ -133,7 +133,7 @@ def test_the_same_pictures_and_poses_at_generated_states(mixed: Path, world: str
     pictures, farthest = Pictures(), 0.0
     for k, index in enumerate(firsts):
         spec = EpisodeSpec.from_json(records.loc[index, "spec"])
-        referent = referents.load(spec.referent, world=world)
+        referent = registry.load(spec.referent, world=world)
         scene = scene_for(referent.assets(), spec.sim.profile, world)
         scene.reset(spec)
         cameras = Cameras(scene, LIBERO.image_size, LIBERO.camera_names)

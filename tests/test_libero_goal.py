@@ -13,16 +13,14 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
 
-import referents
-from core import contact, worlds
+from core import contact, libero, worlds
 from core.exam import read
 from core.spec import FAST, LOOKS
-from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
-from gen import scenes
-from gen.canonical import covered
-from gen.plan import default_sim, plan
+from gen.build import scenes
+from gen.build.canonical import covered
+from gen.planning.plan import default_sim, plan
 from helpers import (
     PICTURE_STATES,
     REPLAYS,
@@ -36,6 +34,7 @@ from oracle.episode import demonstrate
 from oracle.ik import ArmIK
 from oracle.scene import scene_for
 from oracle.skills import CARRY_MARGIN
+from referents import registry
 
 SUITE = "libero_goal"
 # Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the stove's
@@ -88,7 +87,7 @@ def test_a_bowl_beside_the_stove_is_taken_from_a_side_clear_of_it(world: worlds.
     """A bowl whose robot-facing side has the stove's burner under the outer finger: grasped
     there, the finger lands on the burner and the bowl stays (all ten attempts failed so before
     the oracle chose the side); taken from a side clear of it, the task is done."""
-    referent = referents.load(SUITE)
+    referent = registry.load(SUITE)
     sim = default_sim(referent)
     spec = plan(referent, 20, 1, sim)[2]
     bowl = spec.object(spec.task.params["object"])
@@ -108,7 +107,7 @@ def test_the_hand_carries_the_cheese_a_margin_clear_of_the_standing_bottle() -> 
     on one, 6 mm from it in our simulation, and in LIBERO's own struck it and dropped the cheese
     off the plate (issue 29). Now, all the while the cheese is carried, the hand and the cheese
     keep CARRY_MARGIN from the bottle."""
-    referent = referents.load(SUITE)
+    referent = registry.load(SUITE)
     sim = default_sim(referent)
     spec = plan(referent, 10, 7, sim)[5]
     cheese, bottle = spec.task.params["object"], next(o.id for o in spec.objects if o.kind == "wine_bottle")
@@ -154,7 +153,7 @@ def test_the_canonical_exam_is_liberos_covered_tasks(tmp_path: Path) -> None:
     """The exam holds LIBERO-Goal's tasks our skills can do (four), on LIBERO's own states; the
     oracle completes them and obeys the swaps (the same object, another place), the remembered
     layout (`position`) completes them and obeys none; `nothing` scores 0."""
-    referent = referents.load(SUITE)
+    referent = registry.load(SUITE)
     assert [libero.language(t) for t in covered(referent, worlds.world(SUITE))] == [
         "put the bowl on the stove",
         "put the bowl on top of the cabinet",

@@ -14,15 +14,15 @@ from pathlib import Path
 
 import pytest
 
+from core import libero
 from core.exam import read
 from core.spec import FAST, FULL
-from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
-from gen.canonical import CanonicalOptions, build, suite_of, trial_spec
-from gen.cli import UserError
-from gen.plan import world_sim
+from gen.build.canonical import CanonicalOptions, build, suite_of, trial_spec
+from gen.planning.plan import world_sim
 from helpers import initial_state_pictures
+from jobs.cli import UserError
 
 BASES = ("libero_object", "libero_spatial", "libero_goal")
 EVERY = bool(os.environ.get("LIBERO_PRO_ALL"))  # the README's figures: every covered suite and task

@@ -82,7 +82,7 @@ def _agree(exam_root: Path, tmp_path: Path) -> tuple[dict, Scripted]:
 
 @pytest.fixture(scope="module")
 def canonical(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from gen.canonical import CanonicalOptions, build
+    from gen.build.canonical import CanonicalOptions, build
 
     out = tmp_path_factory.mktemp("canonical") / "canonical"
     build(CanonicalOptions(world="libero_object", states=1, tasks=2, image_size=32, out=str(out)))
@@ -102,8 +102,8 @@ def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, 
 
 
 def test_a_libero_pro_lan_suite_hands_the_policy_the_bddl_language_line(tmp_path: Path) -> None:
-    from core.worlds import libero
-    from gen.canonical import CanonicalOptions, build
+    from core import libero
+    from gen.build.canonical import CanonicalOptions, build
 
     out = tmp_path / "lan"
     build(CanonicalOptions(suite="libero_object_lan", states=1, tasks=2, image_size=32, out=str(out)))
@@ -146,7 +146,7 @@ def test_a_generated_exam_of_a_floor_and_a_table_type_runs_in_liberos_simulator(
 )
 def test_bad_input_is_refused_before_any_rollout(argv: list[str], needle: str, canonical: Path, tmp_path: Path) -> None:
     from eval.__main__ import EvalOptions, evaluate
-    from gen.cli import main
+    from jobs.cli import main
 
     out = tmp_path / "out"
     assert main("python -m eval", EvalOptions, evaluate, [*argv, f"exam={canonical}", f"out={out}"]) == 2
@@ -158,7 +158,7 @@ def test_a_native_exam_or_a_missing_libero_environment_is_refused(
 ) -> None:
     from eval import libero_sim
     from eval.__main__ import EvalOptions, evaluate
-    from gen.cli import main
+    from jobs.cli import main
 
     native = make_dataset(tmp_path / "native", "n=1", "split=exam", "image_size=32", "workers=1")
     assert main("python -m eval", EvalOptions, evaluate, ["policy=nothing", "sim=libero", f"exam={native}"]) == 2

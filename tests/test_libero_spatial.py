@@ -14,16 +14,14 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
 
-import referents
-from core import worlds
+from core import libero, worlds
 from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS
-from core.worlds import libero
 from eval.battery import take
 from eval.registry import make
-from gen import scenes
-from gen.canonical import CanonicalOptions, build
+from gen.build import scenes
+from gen.build.canonical import CanonicalOptions, build
 from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,
@@ -35,6 +33,7 @@ from helpers import (
     make_dataset,
 )
 from oracle.scene import scene_for
+from referents import registry
 
 SUITE = "libero_spatial"
 # Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the stove's
@@ -51,11 +50,11 @@ def world() -> worlds.World:
 
 
 @pytest.fixture(scope="module")
-def referent() -> referents.Referent:
-    return referents.load(SUITE)
+def referent() -> registry.Referent:
+    return registry.load(SUITE)
 
 
-def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Referent) -> None:
+def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Referent) -> None:
     """Every body, joint, colliding geom, actuator and camera of LIBERO-Spatial's task-0 scene has
     its twin in ours with the same physics: the table, the mounted Panda, the cabinet's drawers,
     the stove's knob, the bowls, plate, cookie box and ramekin. The fixtures' poses are left out

@@ -16,17 +16,16 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
 
-import referents
-from core import worlds
+from core import libero, worlds
 from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.products import ROLLOUTS
 from core.spec import FAST, LOOKS
-from core.worlds import libero
-from eval.battery import ROLLOUTS, take
+from eval.battery import take
 from eval.registry import make
 from eval.score import read_logs, swaps_obeyed
-from gen import scenes
-from gen.canonical import CanonicalOptions, build
+from gen.build import scenes
+from gen.build.canonical import CanonicalOptions, build
 from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,
@@ -38,6 +37,7 @@ from helpers import (
     make_dataset,
 )
 from oracle.scene import scene_for
+from referents import registry
 
 SUITE = "libero_object"
 # Objects the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the basket's
@@ -54,11 +54,11 @@ def world() -> worlds.World:
 
 
 @pytest.fixture(scope="module")
-def referent() -> referents.Referent:
-    return referents.load(SUITE)
+def referent() -> registry.Referent:
+    return registry.load(SUITE)
 
 
-def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: referents.Referent) -> None:
+def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Referent) -> None:
     """Every body, joint, colliding geom, actuator and camera LIBERO's task-0 scene compiles has
     its twin in ours with the same physics (our scene holds all ten groceries; LIBERO's six)."""
     theirs = dict(np.load(liberos_own("model", {"suite": SUITE, "task": 0}, tmp_path / "model.npz")))
@@ -127,7 +127,7 @@ def test_a_libero_object_dataset_is_liberos_features_and_scene(libero_dataset: P
     assert not [m for c in report["checks"] for m in c["messages"] if m["severity"] == "FAIL"]
 
 
-def test_liberos_layout_files_match_the_referent(referent: referents.Referent) -> None:
+def test_liberos_layout_files_match_the_referent(referent: registry.Referent) -> None:
     """The referent's slots are LIBERO-Object's region centres, and each grocery's canonical slot
     (confound=position) is its own task's target_object_region, as LIBERO's BDDL files say."""
     layout = referent.config.layout

@@ -16,11 +16,11 @@ from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, FULL, EpisodeSpec
 from eval.env import ExamEnv
-from gen import scenes
-from gen.canonical import CanonicalOptions, build
-from gen.cli import UserError
+from gen.build import scenes
+from gen.build.canonical import CanonicalOptions, build
 from gen.config import parse
 from helpers import make_dataset
+from jobs.cli import UserError
 from oracle.scene import spec_scene
 
 WORLD = "libero_spatial"  # its stove's mirror top is what the two looks draw most differently

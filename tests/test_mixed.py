@@ -16,11 +16,11 @@ from PIL import Image
 
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import EpisodeSpec
-from gen import scenes
-from gen.cli import main
+from gen.build import scenes
 from gen.config import GenConfig, parse
-from gen.plan import designs, plan_and_audit
+from gen.planning.plan import designs, plan_and_audit
 from helpers import make_dataset
+from jobs.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -15,12 +15,12 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-import referents
 from core import success, worlds
 from core.exam import PUBLIC_COLUMNS, read
 from gen.config import GenConfig
-from gen.plan import default_sim, plan
+from gen.planning.plan import default_sim, plan
 from helpers import make_dataset
+from referents import registry
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAM_FORMAT_DOC = ROOT / "docs" / "EXAM_FORMAT.md"
@@ -167,11 +167,11 @@ def test_the_exam_format_doc_says_the_face_is_readable_and_achieved_is_the_answe
 
 
 @pytest.mark.fast
-@pytest.mark.parametrize("name", referents.available())
+@pytest.mark.parametrize("name", registry.available())
 def test_a_scenes_object_order_is_the_scenes_not_the_answers(name: str) -> None:
     """The objects of a trial's public scene come in slot order or in one fixed order of their
     ids, so where the target stands in the list says no more than its slot or its name."""
-    referent = referents.load(name)
+    referent = registry.load(name)
     scenes = [spec.public() for spec in plan(referent, 24, 0, default_sim(referent), split="exam")]
     by_slot = all([o.slot for o in s.objects] == sorted(o.slot for o in s.objects) for s in scenes)
     before = {(a.id, b.id) for s in scenes for i, a in enumerate(s.objects) for b in s.objects[i + 1 :]}

@@ -10,22 +10,22 @@ import mujoco
 import numpy as np
 import pytest
 
-import referents
 from core import parquet
 from core.spec import EpisodeSpec, SimSettings
 from core.success import lifted, succeeded
-from gen import scenes
-from gen.plan import designs, plan, realize
-from gen.produce import Producer
+from gen.build import scenes
+from gen.build.produce import Producer
+from gen.planning.plan import designs, plan, realize
 from oracle.episode import demonstrate, replay
 from oracle.ik import DOWN, ArmIK, yaw_matrix
 from oracle.scene import EE_SITE, Scene, scene_for
 from oracle.skills import Skills
+from referents import registry
 
 
 @pytest.fixture(scope="module")
 def scene() -> Scene:
-    return scene_for(referents.load("object").assets())
+    return scene_for(registry.load("object").assets())
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +46,7 @@ def test_ik_reaches_top_down_poses(ik: ArmIK) -> None:
 
 
 def test_demos_succeed(scene: Scene, ik: ArmIK) -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     sim = SimSettings()
     ok = 0
     for i, d in enumerate(designs(ref, 8, seed=21)):
@@ -62,14 +62,14 @@ def _hold_home(spec: EpisodeSpec, steps: int = 40) -> np.ndarray:
 
 
 def test_do_nothing_never_succeeds(scene: Scene) -> None:
-    for spec in plan(referents.load("object"), 4, seed=8, sim=SimSettings()):
+    for spec in plan(registry.load("object"), 4, seed=8, sim=SimSettings()):
         outcome = replay(scene, spec, _hold_home(spec))
         assert not succeeded(spec, outcome)
         assert abs(outcome.rise(spec.target)) < 0.005
 
 
 def test_a_target_that_starts_high_does_not_pass(scene: Scene) -> None:
-    spec = plan(referents.load("object"), 1, seed=8, sim=SimSettings())[0]
+    spec = plan(registry.load("object"), 1, seed=8, sim=SimSettings())[0]
     raised = tuple(
         dataclasses.replace(o, pos=(o.pos[0], o.pos[1], o.pos[2] + 0.12)) if o.id == spec.target else o for o in spec.objects
     )
@@ -78,7 +78,7 @@ def test_a_target_that_starts_high_does_not_pass(scene: Scene) -> None:
 
 
 def test_grasping_the_wrong_object_fails(scene: Scene, ik: ArmIK) -> None:
-    spec = plan(referents.load("object"), 1, seed=8, sim=SimSettings())[0]
+    spec = plan(registry.load("object"), 1, seed=8, sim=SimSettings())[0]
     decoy = spec.counterfactuals[0].target
 
     def wrong(skills: Skills, s: EpisodeSpec) -> None:
@@ -108,7 +108,7 @@ def test_replay_from_recorded_state_lifts_the_same_target(object_dataset: Path) 
 
 
 def test_failed_demos_are_resampled_with_the_same_roles(ik: ArmIK) -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     design = designs(ref, 1, seed=0)[0]
     a = realize(ref, design, 0, 0, SimSettings(), attempt=0)
     b = realize(ref, design, 0, 0, SimSettings(), attempt=1)
@@ -118,7 +118,7 @@ def test_failed_demos_are_resampled_with_the_same_roles(ik: ArmIK) -> None:
 
 
 def test_producer_records_what_it_verified() -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     sim = SimSettings(image_size=32)
     producer = Producer(ref, sim)
     produced = producer.produce(designs(ref, 1, seed=5)[0], 0, 5, max_attempts=3)

@@ -20,14 +20,14 @@ ANSWER = {"target", "program", "face", "variant", "spec", "alternatives", "origi
 
 
 def readme_loop() -> str:
-    """The python block of the README's "Taking the exam in your own code", exactly as printed."""
-    text = (ROOT / "README.md").read_text()
-    section = text[text.index("### Taking the exam in your own code") :]
+    """The python block of docs/EXAMS.md's "Taking the exam in your own code", exactly as printed."""
+    text = (ROOT / "docs" / "EXAMS.md").read_text()
+    section = text[text.index("## Taking the exam in your own code") :]
     return section[section.index("```python\n") + len("```python\n") : section.index("\n```\n")]
 
 
 def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path: Path) -> None:
-    """A lab pastes the README's loop into a folder of its own and runs it: it makes its exam,
+    """A lab pastes the loop docs/EXAMS.md prints into a folder of its own and runs it: it makes its exam,
     takes every row through the documented env, logs and scores them; nothing the policy side
     receives holds the answer, and its policy obeys the name."""
     ran = subprocess.run([sys.executable, "-c", readme_loop()], capture_output=True, text=True, cwd=tmp_path)

@@ -8,19 +8,19 @@ from collections import Counter
 
 import pytest
 
-import referents
 from core.spec import SimSettings
-from gen.plan import default_sim, plan
+from gen.planning.plan import default_sim, plan
+from referents import registry
 
 SIMULATORS = {"mujoco", "robosuite", "mink"}
 
 
-@pytest.mark.parametrize("referent", referents.available())
+@pytest.mark.parametrize("referent", registry.available())
 def test_planning_and_the_audit_import_no_simulator(referent: str) -> None:
     """Plan, exam plan, audit, alternatives and answers of every type, in a fresh interpreter."""
     code = (
         "import sys, referents; from gen.plan import plan, default_sim; from gen.audit import audit;"
-        f"r = referents.load({referent!r}); specs = plan(r, 12, seed=0, sim=default_sim(r));"
+        f"r = registry.load({referent!r}); specs = plan(r, 12, seed=0, sim=default_sim(r));"
         "plan(r, 4, seed=0, sim=default_sim(r), split='exam'); audit(r, specs);"
         "[(r.alternatives(s), r.answer(s), r.assets()) for s in specs];"
         f"loaded = {sorted(SIMULATORS)!r} and set(sys.modules) & {SIMULATORS!r};"
@@ -31,7 +31,7 @@ def test_planning_and_the_audit_import_no_simulator(referent: str) -> None:
 
 
 def test_object_roles_are_balanced() -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     names = [c.name for c in ref.config.objects]
     n_slots = len(ref.config.layout.slots)
     n = len(names) * n_slots  # enough episodes to cover every (object, slot) pair as target
@@ -52,13 +52,13 @@ def test_object_roles_are_balanced() -> None:
 
 
 def test_prefix_balance_holds_for_small_n() -> None:
-    specs = plan(referents.load("object"), 20, seed=0, sim=SimSettings())
+    specs = plan(registry.load("object"), 20, seed=0, sim=SimSettings())
     counts = Counter(s.target for s in specs)
     assert max(counts.values()) - min(counts.values()) <= 1
 
 
 def test_counterfactuals_name_every_other_object() -> None:
-    for s in plan(referents.load("object"), 30, seed=5, sim=SimSettings()):
+    for s in plan(registry.load("object"), 30, seed=5, sim=SimSettings()):
         others = {o.id for o in s.objects} - {s.target}
         assert {c.target for c in s.counterfactuals} == others
         for c in s.counterfactuals:
@@ -68,7 +68,7 @@ def test_counterfactuals_name_every_other_object() -> None:
 
 
 def test_plan_is_deterministic_per_seed() -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     a = [s.to_json() for s in plan(ref, 25, seed=9, sim=default_sim(ref))]
     b = [s.to_json() for s in plan(ref, 25, seed=9, sim=default_sim(ref))]
     c = [s.to_json() for s in plan(ref, 25, seed=10, sim=default_sim(ref))]
@@ -77,5 +77,5 @@ def test_plan_is_deterministic_per_seed() -> None:
 
 
 def test_templates_are_varied() -> None:
-    specs = plan(referents.load("object"), 30, seed=1, sim=SimSettings())
-    assert len({s.template for s in specs}) == len(referents.load("object").config.templates)
+    specs = plan(registry.load("object"), 30, seed=1, sim=SimSettings())
+    assert len({s.template for s in specs}) == len(registry.load("object").config.templates)

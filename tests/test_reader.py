@@ -9,8 +9,8 @@ import numpy as np
 from ledataset.datasets.lerobot_dataset import LeRobotDatasetMetadata
 from test_writer import FPS, SIZE, synthetic_episode
 
-from gen.lerobot_reader import LeRobotReader, frame_count
-from gen.lerobot_writer import Layout, LeRobotWriter
+from gen.lerobot.reader import LeRobotReader, frame_count
+from gen.lerobot.writer import Layout, LeRobotWriter
 
 LENGTHS = [7, 12, 9, 5]
 

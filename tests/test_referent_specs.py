@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from referents import HERE
+from referents.registry import HERE
 
 BASE = yaml.safe_load((HERE / "color.yaml").read_text())
 

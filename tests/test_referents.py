@@ -8,29 +8,29 @@ from collections import Counter
 import numpy as np
 import pytest
 
-import referents
 from core import worlds
 from core.spec import EpisodeSpec
 from core.success import succeeded
-from gen.audit import audit
-from gen.plan import default_sim, plan
+from gen.planning.audit import audit
+from gen.planning.plan import default_sim, plan
 from helpers import visible_bodies
 from oracle.episode import replay
 from oracle.scene import scene_for
+from referents import registry
 
-TYPES = referents.available()
+TYPES = registry.available()
 
 
 def test_all_nine_types_exist_and_each_world_has_its_own() -> None:
     native = {"object", "color", "category", "ordinal", "relation", "negation", "composition", "goal", "verb"}
-    assert set(referents.of_world("native")) == native
+    assert set(registry.of_world("native")) == native
     libero_types = {"libero_object", "libero_spatial", "libero_goal"}
-    assert set(TYPES) == native | libero_types and all(referents.of_world(t) == [t] for t in libero_types)
+    assert set(TYPES) == native | libero_types and all(registry.of_world(t) == [t] for t in libero_types)
 
 
 @pytest.fixture(scope="module", params=TYPES)
-def planned(request: pytest.FixtureRequest) -> tuple[referents.Referent, list[EpisodeSpec]]:
-    ref = referents.load(request.param)
+def planned(request: pytest.FixtureRequest) -> tuple[registry.Referent, list[EpisodeSpec]]:
+    ref = registry.load(request.param)
     return ref, plan(ref, 300, seed=1, sim=default_sim(ref))
 
 
@@ -76,7 +76,7 @@ def test_counterfactuals_ask_for_something_else_in_the_scene(planned: tuple) -> 
 
 @pytest.mark.parametrize("name", TYPES)
 def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
-    ref = referents.load(name)
+    ref = registry.load(name)
     sim = default_sim(ref)
     scene = scene_for(ref.assets(), sim.profile, sim.world)
     for spec in plan(ref, 3, seed=4, sim=sim):
@@ -99,7 +99,7 @@ def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
 
 
 def test_position_confound_is_flagged() -> None:
-    ref = referents.load("object", overrides={"confound": "position"})
+    ref = registry.load("object", overrides={"confound": "position"})
     specs = plan(ref, 200, seed=0, sim=default_sim(ref))
     assert {s.object(s.target).slot for s in specs} == {ref.config.layout.canonical_slot}
     report = audit(ref, specs)
@@ -108,7 +108,7 @@ def test_position_confound_is_flagged() -> None:
 
 
 def test_holdout_and_distractor_only() -> None:
-    ref = referents.load("color", overrides={"holdout": ["purple"], "distractor_only": ["orange"]})
+    ref = registry.load("color", overrides={"holdout": ["purple"], "distractor_only": ["orange"]})
     specs = plan(ref, 120, seed=0, sim=default_sim(ref))
     colors = Counter(o.attributes["color"] for s in specs for o in s.objects)
     targets = Counter(s.object(s.target).attributes["color"] for s in specs)
@@ -122,7 +122,7 @@ def test_holdout_and_distractor_only() -> None:
 def test_restricted_targets_make_every_identity_leak_expected() -> None:
     """Families are declared with the features: the co-appearing categories of a category scene
     are identity, though no word in their name says so."""
-    ref = referents.load("category", overrides={"targets": ["toy"]})
+    ref = registry.load("category", overrides={"targets": ["toy"]})
     report = audit(ref, plan(ref, 120, seed=0, sim=default_sim(ref)))
     leaked = {v["variable"]: v["expected"] for v in report["variables"] if v["leak"]}
     assert {"identity", "co-appearing categories"} <= set(leaked) and all(leaked.values())
@@ -131,10 +131,10 @@ def test_restricted_targets_make_every_identity_leak_expected() -> None:
 
 def test_unsupported_confound_is_refused() -> None:
     with pytest.raises(ValueError, match="confound"):
-        referents.load("ordinal", overrides={"confound": "position"})
+        registry.load("ordinal", overrides={"confound": "position"})
 
 
 def test_tiny_plans_get_no_verdict() -> None:
-    ref = referents.load("object")
+    ref = registry.load("object")
     report = audit(ref, plan(ref, 5, seed=5, sim=default_sim(ref)))
     assert report["verdict"].startswith("too few episodes") and not report["leaks"]

@@ -8,20 +8,20 @@ import mujoco
 import numpy as np
 import pytest
 
-import referents
 from core import worlds
 from core.layout import LAYOUTS, NATIVE
 from core.spec import SimSettings
 from core.worlds.native import TABLE_TOP_Z
-from gen.plan import default_sim, plan
+from gen.planning.plan import default_sim, plan
 from helpers import visible_bodies
 from oracle.render import Cameras
 from oracle.scene import Scene, _hull_distance, scene_for, spec_scene
+from referents import registry
 
 
 @pytest.fixture(scope="module")
 def scene() -> Scene:
-    return scene_for(referents.load("object").assets())
+    return scene_for(registry.load("object").assets())
 
 
 def _extent(model: mujoco.MjModel, data: mujoco.MjData, body_id: int) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +66,7 @@ def test_catalog_extents_match_the_models(world: str) -> None:
 
 
 def test_every_object_is_in_frame_and_parked_ones_are_not(scene: Scene) -> None:
-    for spec in plan(referents.load("object"), 4, seed=2, sim=SimSettings()):
+    for spec in plan(registry.load("object"), 4, seed=2, sim=SimSettings()):
         scene.reset(spec)
         visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
@@ -84,7 +84,7 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
     """The agentview camera's projection (what the pointer loss aims at, train/fit.py) lands on
     each object's pixels in the rendered frames: a lookat camera, and LIBERO's quat camera in its
     mirrored profile."""
-    referent = referents.load(name)
+    referent = registry.load(name)
     sim = default_sim(referent)
     camera = LAYOUTS[sim.profile].agentview
     for spec in plan(referent, 2, seed=3, sim=sim):
@@ -101,7 +101,7 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
 
 
 def test_reset_poses_objects_from_the_spec(scene: Scene) -> None:
-    for spec in plan(referents.load("object"), 3, seed=4, sim=SimSettings()):
+    for spec in plan(registry.load("object"), 3, seed=4, sim=SimSettings()):
         scene.reset(spec)
         for obj in spec.objects:
             np.testing.assert_allclose(scene.object_pos(obj.id), obj.pos, atol=1e-9)
@@ -110,7 +110,7 @@ def test_reset_poses_objects_from_the_spec(scene: Scene) -> None:
 
 
 def test_cameras_render_distinct_views(scene: Scene) -> None:
-    spec = plan(referents.load("object"), 1, seed=0, sim=SimSettings())[0]
+    spec = plan(registry.load("object"), 1, seed=0, sim=SimSettings())[0]
     scene.reset(spec)
     cams = Cameras(scene, 64, ("agentview", "wrist"))
     frames = {k: v.copy() for k, v in cams.render().items()}

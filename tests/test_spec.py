@@ -6,14 +6,14 @@ import json
 
 import pytest
 
-import referents
 from core.spec import EpisodeSpec, SimSettings, SpecError
-from gen.plan import plan
+from gen.planning.plan import plan
+from referents import registry
 
 
 @pytest.fixture(scope="module")
 def specs() -> list[EpisodeSpec]:
-    return plan(referents.load("object"), 12, seed=3, sim=SimSettings())
+    return plan(registry.load("object"), 12, seed=3, sim=SimSettings())
 
 
 def test_json_round_trip_is_exact(specs: list[EpisodeSpec]) -> None:
@@ -48,8 +48,8 @@ def test_version_and_shape_are_checked(specs: list[EpisodeSpec]) -> None:
 def test_a_libero_scene_record_names_every_fixture_and_its_pose(name: str) -> None:
     """The cabinet, the stove, the rack: an episode is rebuilt in LIBERO's environment from its record alone."""
     from core import worlds
-    from gen.plan import default_sim, plan
-    from referents import load
+    from gen.planning.plan import default_sim, plan
+    from referents.registry import load
 
     referent = load(name)
     record = plan(referent, 1, 0, default_sim(referent))[0].scene_record()

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 import yaml
 
-import referents
 from core import parquet
 from core.spec import SimSettings
-from gen import scenes
-from gen.plan import designs, plan
+from gen.build import scenes
+from gen.planning.plan import designs, plan
 from helpers import make_dataset
+from referents import registry
 from referents.schema import ReferentSpecError
 
 SPEC = {
@@ -67,14 +67,14 @@ def tenth_type(folder: Path, module: str = MODULE, spec: dict | None = None) -> 
 @pytest.mark.fast
 def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Path) -> None:
     path = tenth_type(tmp_path)
-    ref = referents.load("ignored", str(path))
+    ref = registry.load("ignored", str(path))
     specs = plan(ref, 8, seed=0, sim=SimSettings())
-    assert {s.referent for s in specs} == {"size"} and "size" not in referents.available()
+    assert {s.referent for s in specs} == {"size"} and "size" not in registry.available()
     assert {s.object(s.target).attributes["size"] for s in specs} == {"small", "big"}
     assert ref.assets() == (("block_large", 1), ("block_small", 1))
-    assert referents.demo_of("size", path) is referents.pick_and_lift
-    with pytest.raises(referents.UnknownReferent, match="needs that file's path"):
-        referents.demo_of("size")
+    assert registry.demo_of("size", path) is registry.pick_and_lift
+    with pytest.raises(registry.UnknownReferent, match="needs that file's path"):
+        registry.demo_of("size")
 
 
 @pytest.mark.fast
@@ -92,7 +92,7 @@ def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Pa
 def test_a_module_outside_the_contract_is_refused_in_one_line(tmp_path: Path, edit, message: str) -> None:
     path = tenth_type(tmp_path, edit(MODULE))
     with pytest.raises(ReferentSpecError, match=re.escape(message)) as error:
-        referents.load("size", str(path))
+        registry.load("size", str(path))
     assert "\n" not in str(error.value)
 
 
@@ -100,7 +100,7 @@ def test_a_module_outside_the_contract_is_refused_in_one_line(tmp_path: Path, ed
 def test_a_scene_beyond_the_inventory_fails_before_simulating(tmp_path: Path) -> None:
     spec = {**SPEC, "objects": [*SPEC["objects"], {"kind": "block_small", "name": "block", "attributes": {"size": "tiny"}}]}
     path = tenth_type(tmp_path, MODULE + assets_def([("block_small", 1), ("block_large", 1)]), {**spec, "objects_per_scene": 3})
-    ref = referents.load("size", str(path))
+    ref = registry.load("size", str(path))
     with pytest.raises(ReferentSpecError, match="assets: a scene holds 2 'block_small' objects"):
         designs(ref, 4, seed=0)
 
@@ -110,7 +110,7 @@ def test_a_module_beside_the_spec_cannot_redefine_a_builtin_type(tmp_path: Path)
     path = tenth_type(tmp_path, MODULE, {**SPEC, "type": "object"})
     (tmp_path / "object.py").write_text(MODULE)
     with pytest.raises(ReferentSpecError, match="type: 'object' is a built-in type"):
-        referents.load("object", str(path))
+        registry.load("object", str(path))
 
 
 @pytest.mark.fast

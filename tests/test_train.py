@@ -21,9 +21,9 @@ from core.layout import NATIVE
 from eval.battery import take
 from eval.policies import FeatureMismatch
 from eval.registry import make
-from gen.lerobot_writer import Episode, Layout, LeRobotWriter
-from gen.stats import image_histogram
-from gen.video import encode_episode
+from gen.lerobot.stats import image_histogram
+from gen.lerobot.video import encode_episode
+from gen.lerobot.writer import Episode, Layout, LeRobotWriter
 from helpers import make_dataset
 from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
 from train.stages import TIMINGS, Ledger

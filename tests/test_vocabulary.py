@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from gen.plan import default_sim, plan
-from referents import Referent, available, load
+from gen.planning.plan import default_sim, plan
+from referents.registry import Referent, available, load
 from referents.schema import ReferentSpecError
 
 N = 24

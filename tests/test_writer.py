@@ -9,9 +9,9 @@ import numpy as np
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core import parquet
-from gen.lerobot_writer import Episode, Layout, LeRobotWriter
-from gen.stats import image_histogram, image_stats
-from gen.video import encode_episode
+from gen.lerobot.stats import image_histogram, image_stats
+from gen.lerobot.video import encode_episode
+from gen.lerobot.writer import Episode, Layout, LeRobotWriter
 
 FPS, SIZE = 20, 32
 

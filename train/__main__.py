@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sys
 
-from gen.cli import UserError, main
+from jobs.cli import UserError, main
 from train.fit import TrainConfig
 
 

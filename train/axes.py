@@ -36,11 +36,11 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import referents
 from core.exam import read
 from eval.policies import FeatureMismatch
-from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
+from jobs.cli import Failed, UserError, main
+from referents import registry
 from train.stages import Ledger, cell, commit, exam_report, generate_once, recipe, train_log, value
 
 PARTS = ("axes", "loo", "tiers")
@@ -78,10 +78,10 @@ class AxesOptions:
 def _check(options: AxesOptions) -> None:
     if not options.parts or any(p not in PARTS for p in options.parts):
         raise UserError(f"parts must be some of {', '.join(PARTS)}, got {options.parts}")
-    unknown = [a for a in options.axes if a not in referents.available()]
+    unknown = [a for a in options.axes if a not in registry.available()]
     if unknown or len(options.axes) < 2 or len(set(options.axes)) != len(options.axes):
         raise UserError(
-            f"axes must be two or more different referent types ({', '.join(referents.available())}), got {options.axes}"
+            f"axes must be two or more different referent types ({', '.join(registry.available())}), got {options.axes}"
         )
     if "loo" in options.parts and options.left_out not in options.axes:
         raise UserError(f"left_out={options.left_out!r} is not one of axes={options.axes}")

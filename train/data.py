@@ -20,11 +20,9 @@ import numpy as np
 
 from core import cache_dir, parquet
 from core.layout import ACTION_KEY, LAYOUTS, STATE_KEY, FeatureLayout
+from core.products import EPISODES_PATH, GENERATION_PATH, INFO_PATH, SCENES_PATH, TASKS_PATH
 from core.worlds import MAX_IMAGE_SIZE
-from gen.lerobot_reader import INFO_PATH, TASKS_PATH, LeRobotReader
-from gen.lerobot_writer import EPISODES_PATH
-from gen.partial import GENERATION_PATH
-from gen.scenes import SCENES_PATH
+from gen.lerobot.reader import LeRobotReader
 
 
 class DatasetError(ValueError):

@@ -35,11 +35,11 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import referents
 from core import worlds
 from core.exam import Exam, read
-from gen.cli import Failed, UserError, main
 from gen.config import GenConfig, parse
+from jobs.cli import Failed, UserError, main
+from referents import registry
 from train.stages import (
     Ledger,
     brief,
@@ -108,7 +108,7 @@ def _referent(world: str) -> str:
     """The object axis of `world`: the object referent natively, a LIBERO world's LIBERO-task type."""
     if world == "native":
         return "object"
-    found = [r for r in referents.of_world(world) if referents.load(r).code.canonical is not None]
+    found = [r for r in registry.of_world(world) if registry.load(r).code.canonical is not None]
     if not found:
         usable = ", ".join(["native", *(w for w in worlds.names() if worlds.world(w).suite and _has_canonical(w))])
         raise UserError(f"world={world} has no referent type that lays out LIBERO's tasks; worlds: {usable}")
@@ -116,7 +116,7 @@ def _referent(world: str) -> str:
 
 
 def _has_canonical(world: str) -> bool:
-    return any(referents.load(r).code.canonical is not None for r in referents.of_world(world))
+    return any(registry.load(r).code.canonical is not None for r in registry.of_world(world))
 
 
 def _out(options: ExperimentOptions) -> Path:
@@ -136,7 +136,7 @@ def _datasets(options: ExperimentOptions) -> dict[str, tuple[list[str], Path]]:
     """Stage name -> (`python -m gen` options, folder): the training sets and the exam."""
     root, size, referent = _out(options), f"image_size={options.image_size}", _referent(options.world)
     train = [f"referent={referent}", f"n={options.n}"]
-    confound = "layout" if "layout" in referents.load(referent).code.CONFOUNDS else "position"
+    confound = "layout" if "layout" in registry.load(referent).code.CONFOUNDS else "position"
     stages = {"confounded": ([*train, f"seed={options.seed}", size, f"confound={confound}"], root / "data" / "confounded")}
     for k, seed in enumerate(_seeds(options)):
         stages[_set_name("deconfounded", k)] = ([*train, f"seed={seed}", size], root / "data" / _set_name("deconfounded", k))
@@ -178,7 +178,7 @@ def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) 
     """A LIBERO world's canonical exam (gen.canonical), made once; None natively."""
     if not worlds.world(options.world).suite:
         return None
-    from gen.canonical import CanonicalOptions, build
+    from gen.build.canonical import CanonicalOptions, build
 
     out = _out(options) / CANONICAL
     chosen = CanonicalOptions(options.world, options.states, options.seed + 1, options.image_size, str(out))
@@ -318,10 +318,10 @@ def _named_places(
 ) -> dict[str, tuple[dict, dict[int, bool]]]:
     """Exam -> the `named_place` shortcut's report and which of its swaps it obeyed, where the referent's
     confounded data ties each name to a place of its own (LIBERO-Object: two); {} where it does not."""
-    from eval.battery import ROLLOUTS
+    from core.products import ROLLOUTS
     from eval.score import read_logs, swaps_obeyed
 
-    if referents.load(referent).code.named_place is None:
+    if registry.load(referent).code.named_place is None:
         return {}
     measured = {}
     for exam_name, folder in exams.items():
@@ -335,7 +335,7 @@ def _named_places(
 def _beyond(exam: Exam, report_dir: Path, place: dict[int, bool]) -> dict:
     """Obeyed name (5 cm) on the swaps the `named_place` shortcut does not obey: there a name read as a
     place leads elsewhere, so only reading it finds the object."""
-    from eval.battery import ROLLOUTS
+    from core.products import ROLLOUTS
     from eval.score import clustered_rate, read_logs, swaps_obeyed
 
     mine, trial = swaps_obeyed(exam, read_logs(report_dir / ROLLOUTS)[0]), exam.trials.set_index("row")["trial"]

@@ -59,7 +59,7 @@ class Ledger:
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
     """Generate `cfg`'s dataset or exam unless its folder already holds a finished one."""
-    from gen.run import generate
+    from gen.build.run import generate
 
     out = Path(str(cfg.out))
     if (out / "meta").is_dir() or (out / "exam.json").is_file():

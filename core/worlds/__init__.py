@@ -7,13 +7,15 @@ its world (`SimSettings.world`), referents plan within the world's objects and r
 oracle builds the world's scene from this description (oracle/scene.py), and the writer, exam
 and battery never ask which world it is. `native` is this project's own scene; the LIBERO
 worlds are LIBERO's scenes as its BDDL problems define them, built from LIBERO's assets
-(core/worlds/libero.py).
+(core/libero.py).
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -148,14 +150,19 @@ class World:
             raise KeyError(f"unknown object kind {name!r} in world {self.name}; known: {', '.join(sorted(self.kinds))}") from None
 
 
-def _worlds() -> dict[str, World]:
-    from core.worlds import libero_goal, libero_object, libero_spatial, native
-
-    return {w.name: w for w in (native.WORLD, libero_object.WORLD, libero_spatial.WORLD, libero_goal.WORLD)}
+HERE = Path(__file__).parent
+FIRST = "native"  # this project's own scene, listed first
 
 
 def names() -> list[str]:
-    return list(_worlds())
+    """Every world: one module of data each in this folder (adding a world is adding its module)."""
+    return sorted((p.stem for p in HERE.glob("*.py") if p.stem != "__init__"), key=lambda n: (n != FIRST, n))
+
+
+def _worlds() -> dict[str, World]:
+    """The worlds by name, each module imported by its name (this package's `__init__` imports none
+    of them: they import it)."""
+    return {name: importlib.import_module(f"{__name__}.{name}").WORLD for name in names()}
 
 
 def world(name: str) -> World:

@@ -15,7 +15,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from core.worlds import Placed, libero, libero_spatial
+from core import libero
+from core.worlds import Placed, libero_spatial
 
 SUITE = "libero_goal"
 HALF_TURN = float(np.pi)

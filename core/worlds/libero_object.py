@@ -1,6 +1,6 @@
 """LIBERO-Object's world: LIBERO's floor arena (its `Libero_Floor_Manipulation` problem), the
 Panda standing on the floor without a mount (`OnTheGroundPanda`), LIBERO's agentview camera
-and the robot's eye-in-hand camera, LIBERO's groceries and basket (core/worlds/libero.py).
+and the robot's eye-in-hand camera, LIBERO's groceries and basket (core/libero.py).
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_floor_manipulation.py,
 envs/robots/on_the_ground_panda.py, envs/arenas/empty_arena.py and bddl_base_domain.py;
@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.worlds import Camera, World, libero
+from core import libero
+from core.worlds import Camera, World
 
 SUITE = "libero_object"
 # OnTheGroundPanda.init_qpos; LIBERO's initial states add N(0, 0.02) noise to it.

@@ -2,7 +2,7 @@
 1.0 x 1.2 m table with its top at 0.9 m), the Panda on its Rethink mount at the table's edge
 (`MountedPanda`), LIBERO's agentview camera and the robot's eye-in-hand camera, the wooden
 cabinet and the flat stove where every LIBERO-Spatial task stands them, and LIBERO's black bowls,
-plate, ramekin and cookie box (core/worlds/libero.py).
+plate, ramekin and cookie box (core/libero.py).
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_tabletop_manipulation.py,
 envs/robots/mounted_panda.py, envs/bddl_base_domain.py and the suite's BDDL files (the fixtures
@@ -13,7 +13,8 @@ compares the compiled scene, its pictures and its physics with LIBERO's own envi
 
 from __future__ import annotations
 
-from core.worlds import Camera, Placed, World, libero
+from core import libero
+from core.worlds import Camera, Placed, World
 from core.worlds.libero_object import ROBOT_HOME
 
 SUITE = "libero_spatial"

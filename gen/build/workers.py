@@ -12,17 +12,17 @@ first episode of that type comes.
 from __future__ import annotations
 
 import concurrent.futures as cf
-import ctypes
 import multiprocessing
 import os
-import signal
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
 from core.spec import SimSettings
-from gen import faults, mix
-from gen.produce import Produced, Producer
+from gen.build.produce import Produced, Producer
+from gen.planning import mix
+from jobs import faults
+from jobs.processes import die_with
 from referents.design import Design
 
 MAX_POOL_RESTARTS = 2
@@ -46,10 +46,10 @@ class Job:
     split: str = "train"
 
     def producer(self, place: int) -> Producer:
-        import referents
+        from referents import registry
 
         name, sim = self.referents[place]
-        return Producer(referents.load(name, self.spec_path, self.overrides, sim.world), sim, self.codec)
+        return Producer(registry.load(name, self.spec_path, self.overrides, sim.world), sim, self.codec)
 
 
 _producers: dict[int, Producer] = {}  # one per referent type, in each worker process
@@ -60,18 +60,6 @@ def _init(job: Job) -> None:
     global _job
     _producers.clear()
     _job = job
-
-
-def die_with(parent: int) -> None:
-    """Make this worker process die with the run that started it (pid `parent`): a run killed
-    outright (SIGKILL, out of memory) would otherwise leave its pool's workers waiting forever,
-    holding its output pipes open (Linux's parent-death signal; elsewhere nothing is armed)."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        return
-    if os.getppid() != parent:  # the run died before the signal was armed
-        os._exit(1)
 
 
 def _init_process(job: Job, parent: int) -> None:

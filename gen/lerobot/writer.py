@@ -22,14 +22,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from core.layout import IMAGE_PREFIX
-from gen import stats as st
-from gen.video import VideoFile, video_info
+from core.products import DATA_PATH, EPISODES_PATH, VIDEO_PATH
+from gen.lerobot import stats as st
+from gen.lerobot.video import VideoFile, video_info
 
 CODEBASE_VERSION = "v3.0"
-CHUNK_FILE = "chunk-{chunk_index:03d}/file-{file_index:03d}"
-DATA_PATH = "data/" + CHUNK_FILE + ".parquet"
-VIDEO_PATH = "videos/{video_key}/" + CHUNK_FILE + ".mp4"
-EPISODES_PATH = "meta/episodes/" + CHUNK_FILE.format(chunk_index=0, file_index=0) + ".parquet"
 DEFAULT_FEATURES = {
     "timestamp": {"dtype": "float32", "shape": [1], "names": None},
     "frame_index": {"dtype": "int64", "shape": [1], "names": None},

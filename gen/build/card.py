@@ -7,9 +7,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
-from gen.preview import PREVIEW_PATH
-from gen.provenance import Provenance
-from referents import Referent
+from core.products import PREVIEW_PATH
+from gen.build.provenance import Provenance
+from referents.registry import Referent
 from referents.schema import ReferentConfig
 
 FRONT_MATTER = """---

@@ -10,10 +10,10 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from gen import dataset, exam, plan_only
+from gen.build import dataset, exam, plan_only
+from gen.build.provenance import Provenance
 from gen.config import GenConfig, finished
-from gen.plan import plan_and_audit
-from gen.provenance import Provenance
+from gen.planning.plan import plan_and_audit
 
 Summary = dataset.DatasetSummary | dataset.AlreadyComplete | plan_only.PlanSummary | exam.ExamSummary
 

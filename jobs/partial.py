@@ -27,15 +27,12 @@ import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from gen import faults
-from gen.cli import UserError
+from core.products import GENERATION_PATH
+from jobs import faults
+from jobs.cli import UserError
 
-if TYPE_CHECKING:
-    from gen.produce import Produced
-
-GENERATION_PATH = "meta/generation.json"  # written last: its presence marks a dataset complete
 EPISODES = "episodes"
 ASSEMBLED = "dataset"
 
@@ -124,7 +121,7 @@ class Partial:
         with open(self._path(index), "rb") as f:
             return pickle.load(f)
 
-    def episodes(self, n: int) -> Iterator[Produced]:
+    def episodes(self, n: int) -> Iterator[Any]:
         for i in range(n):
             yield self.load(i)
 

@@ -19,13 +19,13 @@ import numpy as np
 from core import worlds
 from core.layout import layout
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
-from gen import mix
-from gen.audit import audit
-from gen.cli import UserError
 from gen.config import GenConfig, load_referent
-from referents import Referent
+from gen.planning import mix
+from gen.planning.audit import audit
+from jobs.cli import UserError
 from referents.balance import Balance
 from referents.design import Design
+from referents.registry import Referent
 from referents.schema import ReferentSpecError
 
 # Extra entropy of each split's random streams: an exam never re-draws a training scene.

@@ -24,8 +24,8 @@ import pandas as pd
 
 from core.rates import Rate, wilson
 from core.spec import EpisodeSpec
-from referents import Referent
 from referents.features import IDENTITY, POSITION, Family
+from referents.registry import Referent
 
 FOLDS = 5
 LEAK_MARGIN = 0.05

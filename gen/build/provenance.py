@@ -16,12 +16,12 @@ from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 
-import referents
 from core import __version__, worlds
 from core.layout import NATIVE
 from core.spec import FAST
 from gen.config import GenConfig
-from referents import Referent
+from referents import registry
+from referents.registry import Referent
 
 # The options that determine a product's bytes (beside the referent spec's overrides).
 DETERMINING = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attempts", "spec", "objects_per_scene", "plan_only")
@@ -78,7 +78,7 @@ class Provenance:
         cfg = self.config
         parts = [("n", f"n={cfg.n}"), ("seed", f"seed={cfg.seed}"), ("image_size", f"image_size={cfg.image_size}")]
         parts.append(("fps", f"fps={cfg.fps}"))
-        own = isinstance(cfg.referent, str) and cfg.world == referents.world_of(cfg.referent, cfg.spec)
+        own = isinstance(cfg.referent, str) and cfg.world == registry.world_of(cfg.referent, cfg.spec)
         if cfg.world is not None and not own:
             parts.append(("world", f"world={cfg.world}"))  # a type's own world goes unsaid
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
@@ -105,7 +105,7 @@ class Provenance:
         kept = [text for name, text in self._options() if name not in NOT_INHERITED_BY_EXAM and name != "world"]
         lines = []
         for one in self.config.shares():
-            own = one.world is None or one.world == referents.world_of(one.referent, one.spec)
+            own = one.world is None or one.world == registry.world_of(one.referent, one.spec)
             world = [] if own else [f"world={one.world}"]
             exam = ["n=200", f"seed={self.config.seed + 1}", "split=exam"]
             lines.append(" ".join(["python -m gen", f"referent={one.referent}", *world, *kept, *exam]))

@@ -18,16 +18,16 @@ import numpy as np
 
 from core import exam
 from core.layout import NATIVE, STATE_KEY, TASK_KEY
-from gen import card
-from gen.cli import UserError
+from gen.build import card
+from gen.build.provenance import Provenance
 from gen.config import GenConfig
-from gen.partial import staging
-from gen.plan import Planned
-from gen.provenance import Provenance
-from referents import Referent
+from gen.planning.plan import Planned
+from jobs.cli import UserError
+from jobs.partial import staging
+from referents.registry import Referent
 
 if TYPE_CHECKING:
-    from gen.produce import Producer
+    from gen.build.produce import Producer
     from oracle.episode import Demo
 
 HORIZON_FACTOR, HORIZON_SLACK = 1.5, 20  # rollout steps allowed: 1.5x the longest oracle demo of the trial, plus 20
@@ -62,7 +62,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
     """Every trial's rollouts, each trial demonstrated by the oracle first."""
     from tqdm import tqdm
 
-    from gen.produce import DemoFailed, Producer
+    from gen.build.produce import DemoFailed, Producer
 
     referent = planned.only.referent
     producer = Producer(referent, planned.only.sim)

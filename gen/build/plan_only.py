@@ -7,11 +7,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from gen import card, scenes
-from gen.dataset import audits, verdict, write_audit, write_generation
-from gen.partial import staging
-from gen.plan import Planned
-from gen.provenance import Provenance
+from gen.build import card, scenes
+from gen.build.dataset import audits, verdict, write_audit, write_generation
+from gen.build.provenance import Provenance
+from gen.planning.plan import Planned
+from jobs.partial import staging
 
 
 @dataclass

@@ -13,18 +13,19 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from core.products import AUDIT_PATH, GENERATION_PATH, PREVIEW_PATH
 from core.spec import EpisodeSpec
-from gen import card, faults, mix, scenes
-from gen.audit import agree, audit
-from gen.cli import UserError
+from gen.build import card, scenes
+from gen.build.provenance import Provenance, run_record
+from gen.build.sheet import contact_sheet
 from gen.config import GenConfig
-from gen.partial import GENERATION_PATH, Partial
-from gen.plan import Planned
-from gen.preview import PREVIEW_PATH, contact_sheet
-from gen.provenance import Provenance, run_record
-from referents import Referent
-
-AUDIT_PATH = "meta/audit.json"
+from gen.planning import mix
+from gen.planning.audit import agree, audit
+from gen.planning.plan import Planned
+from jobs import faults
+from jobs.cli import UserError
+from jobs.partial import Partial
+from referents.registry import Referent
 
 
 @dataclass
@@ -130,8 +131,8 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
     """Produce every episode not yet in the partial run; returns the failed oracle attempts."""
     from tqdm import tqdm
 
-    from gen.produce import DemoFailed
-    from gen.workers import Job, WorkerCrash, produce
+    from gen.build.produce import DemoFailed
+    from gen.build.workers import Job, WorkerCrash, produce
 
     types = tuple((one.referent, share.sim) for one, share in zip(cfg.shares(), planned.shares, strict=True))
     job = Job(types, cfg.spec, cfg.spec_overrides(), cfg.codec, cfg.seed, cfg.max_attempts)
@@ -156,7 +157,7 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
 
 def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) -> tuple[list[dict], int, list[EpisodeSpec]]:
     """The LeRobot files, from the episode files, in order."""
-    from gen.lerobot_writer import Layout, LeRobotWriter
+    from gen.lerobot.writer import Layout, LeRobotWriter
 
     sim, features = planned.recording, planned.recording.layout
     writer = LeRobotWriter(

@@ -21,11 +21,7 @@ import pandas as pd
 
 from core import parquet
 from core.layout import IMAGE_PREFIX
-
-INFO_PATH = "meta/info.json"
-STATS_PATH = "meta/stats.json"
-TASKS_PATH = "meta/tasks.parquet"
-EPISODES_DIR = "meta/episodes"
+from core.products import EPISODES_DIR, INFO_PATH, STATS_PATH, TASKS_PATH
 
 
 @dataclass(frozen=True)

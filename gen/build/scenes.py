@@ -23,12 +23,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from core import parquet
+from core.products import SCENES_PATH
 from core.spec import EpisodeSpec
 
 if TYPE_CHECKING:
-    from gen.produce import Produced
-
-SCENES_PATH = "meta/scenes.parquet"
+    from gen.build.produce import Produced
 
 
 def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None, mixed: bool = False) -> dict:

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, TypeVar
 
-from gen.cli import UserError
+from jobs.cli import UserError
 
 T = TypeVar("T")
 

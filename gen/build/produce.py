@@ -14,16 +14,16 @@ import numpy as np
 
 from core.spec import EpisodeSpec, SimSettings
 from core.success import Outcome
-from gen.lerobot_writer import Episode
-from gen.plan import realize
-from gen.stats import image_histogram
-from gen.video import encode_episode
+from gen.lerobot.stats import image_histogram
+from gen.lerobot.video import encode_episode
+from gen.lerobot.writer import Episode
+from gen.planning.plan import realize
 from oracle.episode import Demo, demonstrate
 from oracle.ik import ArmIK
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
-from referents import Referent
 from referents.design import Design
+from referents.registry import Referent
 
 
 @dataclass
