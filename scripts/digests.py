@@ -50,8 +50,9 @@ def _digest(path: Path) -> str:
     if path.name == "generation.json":  # what differs between identical runs, or machines
         record = json.loads(data)
         record.pop("seconds", None)
-        for spec in [record.get("referent_spec") or {}, *(record.get("referent_specs") or [])]:
-            spec.pop("path", None)
+        spec = record.get("referent_spec") or {}
+        for one in [spec, *(v for v in spec.values() if isinstance(v, dict) and "path" in v)]:
+            one.pop("path", None)
         data = json.dumps(record, sort_keys=True).encode()
     return hashlib.sha256(data).hexdigest()[:40]
 

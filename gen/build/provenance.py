@@ -45,6 +45,13 @@ def run_record(cfg: GenConfig) -> dict:
     return record
 
 
+def _without_paths(spec: dict) -> dict:
+    """A resolved spec (or a mix's, one per type) without the file path each was read from."""
+    if "path" in spec:
+        return {k: v for k, v in spec.items() if k != "path"}
+    return {k: _without_paths(v) if isinstance(v, dict) else v for k, v in spec.items()}
+
+
 @dataclass(frozen=True)
 class Provenance:
     """The generator's options, the resolved referent spec, and the software that ran."""
@@ -69,8 +76,11 @@ class Provenance:
 
     @cached_property
     def spec_hash(self) -> str:
-        """Content hash of the resolved referent spec."""
-        return hashlib.sha256(json.dumps(self.referent_spec, sort_keys=True, default=str).encode()).hexdigest()[:16]
+        """Content hash of the resolved referent spec: what it says, not where its file lies (the
+        same spec installed elsewhere, or moved, hashes the same)."""
+        return hashlib.sha256(json.dumps(_without_paths(self.referent_spec), sort_keys=True, default=str).encode()).hexdigest()[
+            :16
+        ]
 
     def _options(self) -> list[tuple[str, str]]:
         """(option, as the command line spells it) for every option the product's command names
