@@ -116,18 +116,15 @@ CONTRACT = tuple(f.name for f in fields(TypeModule))
 
 
 @functools.cache
-def code_of(path: Path) -> TypeModule:
-    """The checked code of the type module at `path` (a built-in type's, or one beside its spec)."""
-    built_in = path.parent.resolve() == Path(__file__).resolve().parent
-    module = importlib.import_module(f"referents.{path.stem}") if built_in else _import_file(path)
-    for name in _defined(path):
-        if not name.startswith("_") and name not in CONTRACT:
-            raise ReferentSpecError(
-                f"{path}: {name}: not part of the referent type contract ({', '.join(CONTRACT)}); a helper's name starts with _"
-            )
-    if not hasattr(module, "design"):
+def code_of(path: Path, over: Path | None = None) -> TypeModule:
+    """The checked code of the type module at `path` (a built-in type's, or one beside its spec),
+    each hook a module `over` defines (a world's, beside that world's spec of the type) in place of
+    the type's own."""
+    found = _hooks(path)
+    if "design" not in found:
         raise ReferentSpecError(f"{path}: design: missing; every referent type defines design(config, balance) -> Design")
-    found = {name: getattr(module, name) for name in CONTRACT if hasattr(module, name)}
+    if over is not None:
+        found |= _hooks(over)
     for name, value in found.items():
         if name != "CONFOUNDS" and not callable(value):
             raise ReferentSpecError(f"{path}: {name}: must be a function, got {value!r}")
@@ -135,6 +132,18 @@ def code_of(path: Path) -> TypeModule:
     if not isinstance(confounds, tuple) or not set(confounds) <= set(CONFOUNDS):
         raise ReferentSpecError(f"{path}: CONFOUNDS: must be a tuple of {', '.join(CONFOUNDS)}, got {confounds!r}")
     return TypeModule(**found)
+
+
+def _hooks(path: Path) -> dict:
+    """The contract's names a module defines; any other public name is refused in one line."""
+    built_in = path.parent.resolve() == Path(__file__).resolve().parent
+    module = importlib.import_module(f"referents.{path.stem}") if built_in else _import_file(path)
+    for name in _defined(path):
+        if not name.startswith("_") and name not in CONTRACT:
+            raise ReferentSpecError(
+                f"{path}: {name}: not part of the referent type contract ({', '.join(CONTRACT)}); a helper's name starts with _"
+            )
+    return {name: getattr(module, name) for name in CONTRACT if hasattr(module, name)}
 
 
 def _defined(path: Path) -> list[str]:

@@ -1,33 +1,20 @@
-"""Referent types: the ways an instruction can name its target.
+"""The referent types by name: which there are, which world each lays its scenes out in, and
+loading one (its spec validated, its code checked against the contract, referents/contract.py).
 
-Each type is one declarative spec (`<type>.yaml`, schema in `referents.schema`) and one small
-module (`<type>.py`) that keeps to the contract in `referents.contract`:
-
-* `design(config, balance) -> Design` — the balanced discrete choices of one episode (required);
-* `demo(skills, spec)` — the oracle's plan (default: grasp the target and lift it);
-* `alternatives(config, spec) -> list[Alternative]` — what the instruction chooses among, for
-  the confound audit (default: every object in the scene);
-* `answer(spec) -> str` — which alternative is right (default: the target object);
-* `assets(config)` — the model inventory (default: one body per candidate of a kind, at most
-  `objects_per_scene`);
-* `validate(config)` — type-specific checks of the spec (default: none);
-* `shortcut(config, spec) -> EpisodeSpec` — what an instruction-blind policy does in a scene,
-  which the `position` reference policy demonstrates (default: pick up whatever stands nearest
-  the canonical slot);
-* `named_place(config, spec, named) -> EpisodeSpec` — what a policy does that reads the name only as
-  the place its object always stood in the confounded data, which the `named_place` reference policy
-  demonstrates (default: none; a type whose confounded data puts every target in one slot has
-  nothing to add to `shortcut`);
-* `words(config)` — what else `targets=`, `distractor_only=` and `holdout=` may name besides the
-  objects' names and attributes (e.g. a place), which `design` then honours (default: nothing);
-* `CONFOUNDS` — the shortcuts `confound=` may re-introduce (default: none).
-
-The built-in types live here; a spec file given by path may bring its type's module beside it
-(`<dir>/<type>.py`). Adding a type means adding those two files; nothing else changes.
+A built-in type is `referents/<type>.yaml` + `referents/<type>.py`, in its own world (ours unless
+the spec says otherwise). A type in another world is data, `referents/in_worlds/<world>/<type>.yaml`
+(that world's objects, places and wording for the type), with an optional module beside it,
+`<world>/<type>.py`, whose hooks override the type's (LIBERO-Object's object axis knows LIBERO's own
+tasks: its `canonical`, its shortcuts). `referent=<type> world=<world>` is the one grammar. A
+world's spec may record its episodes under a name of its own (`type: libero_object`), kept from
+when it was a type of its own; `referent=libero_object` is that name, an alias of
+`referent=object world=libero_object`, and both record the same. A spec file given by path may
+bring its type's module beside it (`<dir>/<type>.py`).
 """
 
 from __future__ import annotations
 
+import functools
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,8 +32,8 @@ from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
 
 __all__ = [
-    "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "demo_of", "load", "of_world", "own_name", "pick_and_lift",
-    "spec_file", "world_of", "worlds_of",
+    "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "carried_by", "demo_of", "load", "of_world", "own_name",
+    "pick_and_lift", "spec_file", "types", "world_of", "worlds_of",
 ]  # fmt: skip
 
 HERE = Path(__file__).parent
@@ -57,9 +44,26 @@ class UnknownReferent(ValueError):
     pass
 
 
-def available() -> list[str]:
-    """The built-in types."""
+def types() -> list[str]:
+    """The built-in types: a spec and a module each in this folder."""
     return sorted(p.stem for p in HERE.glob("*.yaml"))
+
+
+@functools.cache
+def _in_worlds() -> dict[Path, tuple[str, str, str]]:
+    """Every spec of a type in another world than its own: its file -> (type, world, the name its
+    episodes record)."""
+    return {p: (p.stem, p.parent.name, _field(p, "type", p.stem)) for p in sorted(IN_WORLDS.glob("*/*.yaml"))}
+
+
+def _alias(name: str) -> Path | None:
+    """The spec a world's own name for a type stands for (`libero_object`: the object axis there)."""
+    return next((path for path, (kind, _, label) in _in_worlds().items() if label == name and label != kind), None)
+
+
+def available() -> list[str]:
+    """Every name `referent=` takes: the built-in types and the names some worlds' specs record."""
+    return sorted([*types(), *(label for kind, _, label in _in_worlds().values() if label != kind)])
 
 
 @dataclass(frozen=True)
@@ -125,13 +129,19 @@ class Referent:
         return spec if destination.container(self.config) is None else destination.without(spec)
 
 
-def _module_path(referent_type: str, spec_path: str | Path | None) -> Path | None:
-    """Where a type's code lives: beside the spec file it came from, else among the built-in types."""
-    if spec_path is not None:
-        beside = Path(spec_path).resolve().parent / f"{referent_type}.py"
-        if beside.parent != HERE.resolve() and beside.is_file():
-            return beside
-    return HERE / f"{referent_type}.py" if referent_type in available() else None
+def _modules(referent_type: str, spec_path: Path) -> tuple[Path | None, Path | None]:
+    """A type's code: its module, and a module whose hooks override it (a world's, beside that
+    world's spec of the type) or None. A spec outside the package may bring its module beside it."""
+    beside = spec_path.resolve().parent / f"{referent_type}.py"
+    if spec_path.resolve().parent.parent == IN_WORLDS.resolve():  # in_worlds/<world>/<type>.yaml (+ .py)
+        over = spec_path.with_suffix(".py")
+        return HERE / f"{spec_path.stem}.py", over if over.is_file() else None
+    if beside.parent != HERE.resolve() and beside.is_file():
+        return beside, None
+    alias = _alias(referent_type)  # a world's own name for a type: that world's code of it
+    if alias is not None:
+        return _modules(referent_type, alias)
+    return (HERE / f"{referent_type}.py" if referent_type in types() else None), None
 
 
 def _field(path: Path, name: str, default: str) -> str:
@@ -147,67 +157,63 @@ def _field(path: Path, name: str, default: str) -> str:
 
 def world_of(name: str, spec_path: str | Path | None = None) -> str:
     """The world a referent's scenes happen in (its own spec's)."""
-    return _field(Path(spec_path) if spec_path is not None else HERE / f"{name}.yaml", "world", "native")
+    path = Path(spec_path) if spec_path is not None else (_alias(name) or HERE / f"{name}.yaml")
+    return _field(path, "world", "native")
 
 
 def of_world(world: str) -> list[str]:
-    """The built-in referent types whose own scenes are in `world`."""
+    """The referents whose own scenes are in `world` (a world's own name for a type among them)."""
     return [name for name in available() if world_of(name) == world]
 
 
 def carried_by(world: str) -> list[str]:
-    """Every built-in type `referent=<type> world=<world>` takes: its own, those with a spec for it,
-    and those that are the same axis there (`object` in libero_object)."""
+    """Every name `referent=<name> world=<world>` takes: the types with a spec there, and the
+    referents of that world."""
     return [name for name in available() if world in worlds_of(name)]
 
 
-def _aliases(name: str) -> list[str]:
-    """The built-in types that are the axis `name` in a world of their own (libero_object's `axis: object`)."""
-    return [other for other in available() if _field(HERE / f"{other}.yaml", "axis", "") == name]
-
-
 def worlds_of(name: str) -> list[str]:
-    """The worlds that carry referent `name`: its own, those with a spec of it (IN_WORLDS/<world>/<name>.yaml),
-    and those of a type that is the same axis there."""
-    others = sorted(p.parent.name for p in IN_WORLDS.glob(f"*/{name}.yaml"))
-    return list(dict.fromkeys([world_of(name), *others, *(world_of(a) for a in _aliases(name))]))
+    """The worlds that carry referent `name`: its own, and those with a spec of it (IN_WORLDS/<world>/<name>.yaml)."""
+    return list(dict.fromkeys([world_of(name), *(world for kind, world, _ in _in_worlds().values() if kind == name)]))
 
 
 def spec_file(name: str, world: str | None = None) -> Path:
-    """The built-in spec of referent `name` in `world` (default its own): referents/<name>.yaml, a spec
-    of the type for that world (IN_WORLDS/<world>/<name>.yaml: data only, the type's module designs
-    it), or the type that is that axis there (`referent=object world=libero_object` is libero_object)."""
+    """The built-in spec of referent `name` in `world` (default its own): referents/<name>.yaml, or
+    the type's spec for that world (IN_WORLDS/<world>/<name>.yaml), or the spec a world's own name
+    for a type stands for."""
     if name not in available():
         raise UnknownReferent(f"unknown referent {name!r}; available: {', '.join(available())}")
+    alias = _alias(name)
+    if alias is not None and world in (None, alias.parent.name):
+        return alias
     if world is None or world == world_of(name):
         return HERE / f"{name}.yaml"
     there = IN_WORLDS / world / f"{name}.yaml"
     if there.is_file():
         return there
-    alias = [a for a in _aliases(name) if world_of(a) == world]
-    if alias:
-        return HERE / f"{alias[0]}.yaml"
     carriers = ", ".join(worlds_of(name))
     raise UnknownReferent(f"referent {name} has no design in world {world}; worlds that carry {name}: {carriers}")
 
 
 def own_name(name: str, world: str | None) -> tuple[str, str | None]:
-    """A type in a world as the built-in type that is that axis there, in its own world
-    (`object` in libero_object: `libero_object`, None), else as given."""
-    alias = [a for a in _aliases(name) if world is not None and world_of(a) == world] if name in available() else []
-    return (alias[0], None) if alias and not (IN_WORLDS / world / f"{name}.yaml").is_file() else (name, world)  # type: ignore[operator]
+    """A type in a world as the name its episodes there record, where the world's spec gives one of
+    its own (`object` in libero_object: `libero_object`, its world its own), else as given."""
+    there = IN_WORLDS / str(world) / f"{name}.yaml"
+    label = _in_worlds()[there][2] if world is not None and there in _in_worlds() else name
+    return (label, None) if label != name else (name, world)
 
 
 def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:
-    """The oracle's plan for a type's episodes, by the type's name (all a replay needs: no spec
+    """The oracle's plan for a type's episodes, by the name they record (all a replay needs: no spec
     file). A type brought beside its spec file is found only given that file's path."""
-    module = _module_path(referent_type, spec_path)
+    path = Path(spec_path) if spec_path is not None else (_alias(referent_type) or HERE / f"{referent_type}.yaml")
+    module, over = _modules(referent_type, path)
     if module is None:
         raise UnknownReferent(
             f"unknown referent type {referent_type!r}; built-in: {', '.join(available())} "
             "(a type brought beside its spec file needs that file's path)"
         )
-    return code_of(module).demo
+    return code_of(module, over).demo
 
 
 def _held_out(config: ReferentConfig, exc: ReferentSpecError) -> ReferentSpecError:
@@ -233,7 +239,7 @@ def load(
         if not path.is_file():
             raise ReferentSpecError(f"{path}: referent spec file not found")
     config = ReferentConfig.from_yaml(path, overrides)
-    module = _module_path(config.type, path)
+    module, over = _modules(config.type, path)
     if module is None:
         raise config.fail(
             "type",
@@ -242,7 +248,7 @@ def load(
         )
     if module.parent != HERE and config.type in available():
         raise config.fail("type", f"{config.type!r} is a built-in type; the module beside the spec ({module}) needs another name")
-    code = code_of(module)
+    code = code_of(module, over)
     if config.confound and config.confound not in code.CONFOUNDS:
         raise config.fail("confound", f"{config.confound!r} is not defined for referent type {config.type!r}")
     try:

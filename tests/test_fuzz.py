@@ -45,7 +45,7 @@ def test_any_option_line_parses_or_fails_in_one_line(tmp_path: Path, argv: list[
         os.chdir(cwd)
 
 
-BASES = {name: yaml.safe_load((registry.HERE / f"{name}.yaml").read_text()) for name in registry.available()}
+BASES = {name: yaml.safe_load(registry.spec_file(name).read_text()) for name in registry.available()}
 JUNK = st.one_of(
     st.none(),
     st.integers(-5, 50),

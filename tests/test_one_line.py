@@ -121,8 +121,11 @@ def test_check_says_a_plan_is_a_plan(plan_folder: Path) -> None:
             ["objects_per_scene=3 does not fit referent goal", "accepted: objects_per_scene=4"],
         ),
         (
-            ["spec=referents/libero_object.yaml", "world=libero_goal"],
-            ["spec=referents/libero_object.yaml lays out scenes in world libero_object, not libero_goal", "leave world= out"],
+            ["spec=referents/in_worlds/libero_object/object.yaml", "world=libero_goal"],
+            [
+                "spec=referents/in_worlds/libero_object/object.yaml lays out scenes in world libero_object, not libero_goal",
+                "leave world= out",
+            ],
         ),
     ],
     ids=["libero_object", "goal", "spec-in-another-world"],

@@ -19,7 +19,8 @@ SIMULATORS = {"mujoco", "robosuite", "mink"}
 def test_planning_and_the_audit_import_no_simulator(referent: str) -> None:
     """Plan, exam plan, audit, alternatives and answers of every type, in a fresh interpreter."""
     code = (
-        "import sys, referents; from gen.plan import plan, default_sim; from gen.audit import audit;"
+        "import sys; from referents import registry; from gen.planning.plan import plan, default_sim;"
+        "from gen.planning.audit import audit;"
         f"r = registry.load({referent!r}); specs = plan(r, 12, seed=0, sim=default_sim(r));"
         "plan(r, 4, seed=0, sim=default_sim(r), split='exam'); audit(r, specs);"
         "[(r.alternatives(s), r.answer(s), r.assets()) for s in specs];"

@@ -1,5 +1,5 @@
 """LIBERO-Spatial's relation axis: the black bowl named by where it stands goes on the plate (see
-libero_spatial.yaml).
+relation.yaml beside it).
 
 A scene is a pair of places (any two whose words mention nothing in common and that stand
 `min_gap` apart) with an identical bowl in each: every place is the named one equally often, and

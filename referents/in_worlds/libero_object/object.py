@@ -1,4 +1,4 @@
-"""LIBERO-Object's object axis: the named grocery goes into the basket (see libero_object.yaml).
+"""LIBERO-Object's object axis: the named grocery goes into the basket (see object.yaml beside it).
 
 The groceries are chosen, placed and named as in the object referent (every grocery the target
 and a distractor in every region equally often); the basket, the spec's `container`, stands in

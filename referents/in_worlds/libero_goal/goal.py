@@ -1,4 +1,4 @@
-"""LIBERO-Goal's goal axis: the named object goes where the instruction says (see libero_goal.yaml).
+"""LIBERO-Goal's goal axis: the named object goes where the instruction says (see goal.yaml beside it).
 
 The target of an episode is the destination (a place on the stove or the cabinet, the plate, the
 bowl) and `task.params.object` is what to carry, as in the goal referent; the four objects stand
@@ -19,7 +19,6 @@ from referents.balance import Balance
 from referents.compose import slug
 from referents.design import Design, Placement
 from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
-from referents.goal import demo as demo  # the goal referent's plan: carry params.object to the target
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
