@@ -24,7 +24,7 @@ export LP_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= PASSIVE
 export TOKENIZERS_PARALLELISM ?= false
 
-.PHONY: setup demo test test-fast bench clean
+.PHONY: setup demo test test-fast lint fmt check bench clean
 
 setup: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
 
@@ -53,15 +53,26 @@ $(LIBERO_REF_STAMP):
 demo: $(STAMP)
 	$(BIN)/python -m gen referent=object n=20 out=datasets/object overwrite=true
 
-test: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP)
-	$(BIN)/ruff check .
-	$(BIN)/ruff format --check .
+test: $(STAMP) $(V21_STAMP) $(LIBERO_REF_STAMP) lint
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=25
 
-# The pure core, planning, the audit and the command lines: nothing simulated (< 3 min on 2 cores).
+# The lane of tests/fast: the pure core, planning, the audit and the command lines, nothing simulated.
 test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -n 2 tests/fast
+
+# Lint: ruff's rules, the formatting, and the import graph (nothing runs upward or round a circle).
+lint: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q -m fast -n 2
+	$(BIN)/ruff format --check .
+	$(BIN)/python scripts/import_graph.py --check
+
+# Format the code in place (and fix what ruff's rules can).
+fmt: $(STAMP)
+	$(BIN)/ruff check --fix .
+	$(BIN)/ruff format .
+
+# Before a commit: lint and the fast lane (a few minutes here). .pre-commit-config.yaml runs it.
+check: lint test-fast
 
 bench: $(STAMP)
 	$(BIN)/python bench/generate.py

@@ -4,7 +4,7 @@
 
 Plans `n` episodes exactly as `python -m gen` with the same options would, and demonstrates
 each one's first realisation (attempt 0) with the oracle, nothing rendered or written: the
-first-try rate the README's generation figures quote, with a Wilson 95% interval, the failed
+first-try rate the docs' generation figures quote, with a Wilson 95% interval, the failed
 episodes and why, and the mean episode length in control steps.
 """
 

@@ -57,8 +57,8 @@ def bench(options: BenchOptions) -> None:
         for cfg in configs:
             cfg.out = str(Path(tmp) / cfg.profile)
             validate(cfg)  # the generator's own rules for these options, before any work
-        produce.encode_episode = timed("encode", produce.encode_episode)  # type: ignore[assignment]
-        Cameras.render = timed("render", Cameras.render)  # type: ignore[method-assign]
+        produce.encode_episode = timed("encode", produce.encode_episode)
+        Cameras.render = timed("render", Cameras.render)
         per_episode = {cfg.profile: run(cfg) for cfg in configs}
     first = options.profiles[0]
     for profile, secs in list(per_episode.items())[1:]:

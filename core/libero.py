@@ -37,7 +37,7 @@ def _scanned(name: str, size: tuple[float, float, float], bottom: float, faces: 
     """A Google Scanned Object of LIBERO's (stable_scanned_objects), resting turned a quarter about z;
     `faces`: its drawn mesh's triangles where not oracle/meshes.py's default."""
     params: dict = {"xml": f"stable_scanned_objects/{name}/{name}.xml"} | ({"faces": faces} if faces else {})
-    return Kind(name, "libero", size, bottom, params=params, quat=QUARTER, **fields)  # type: ignore[arg-type]
+    return Kind(name, "libero", size, bottom, params=params, quat=QUARTER, **fields)
 
 
 def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface: float, inner: float) -> Kind:
@@ -382,7 +382,7 @@ def parse_bddl(text: str, name: str = "") -> Problem:
     goal = goal[1:] if goal and goal[0] == "And" else [goal]
     return Problem(
         name=name,
-        regions=regions,  # type: ignore[arg-type]
+        regions=regions,
         targets=targets,
         objects=typed(sections.get(":objects", [])),
         fixtures=typed(sections.get(":fixtures", [])),

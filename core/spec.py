@@ -67,9 +67,9 @@ class TaskSpec:
 
 
 # How the cameras draw a scene (oracle/scene.py, oracle/render.py). `fast`: meshes lightened and
-# no reflections, a mirror top stood in for by a plate (README: rendering). `full`: every mesh as
+# no reflections, a mirror top stood in for by a plate (docs/LIBERO.md: each object as LIBERO draws it). `full`: every mesh as
 # its file has it and MuJoCo's reflections, as the world's own simulator draws it (LIBERO's
-# scanned basket and bowls, its mirror stove top), at 2.7-3.9x the generation time (README: look=full).
+# scanned basket and bowls, its mirror stove top), at 2.7-3.9x the generation time (docs/LIBERO.md: look=full).
 FAST, FULL = "fast", "full"
 LOOKS = (FAST, FULL)
 
@@ -212,7 +212,7 @@ class EpisodeSpec:
                         kind=o["kind"],
                         name=o["name"],
                         slot=int(o["slot"]),
-                        pos=tuple(float(v) for v in o["pos"]),  # type: ignore[arg-type]
+                        pos=tuple(float(v) for v in o["pos"]),
                         yaw=float(o["yaw"]),
                         attributes=dict(o.get("attributes", {})),
                     )
@@ -222,7 +222,7 @@ class EpisodeSpec:
                 instruction=str(d["instruction"]),
                 template=str(d["template"]),
                 counterfactuals=tuple(
-                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]), c.get("program"))  # type: ignore[arg-type]
+                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]), c.get("program"))
                     for c in d["counterfactuals"]
                 ),
                 assets=tuple((str(k), int(n)) for k, n in d["assets"]),

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from lerobot.policies.pretrained import PreTrainedPolicy
     from peft import PeftModel
 
-INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; README 'LeRobot checkpoints')"
+INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; docs/EXAMS.md 'LeRobot checkpoints')"
 
 
 class LeRobotPolicy:

@@ -197,7 +197,7 @@ class LiberoSim:
         from eval.libero_server import write_frame
 
         try:
-            write_frame(self.server.stdin, header, arrays)  # type: ignore[arg-type]
+            write_frame(self.server.stdin, header, arrays)
             reply = _read_frame(self.server.stdout)
         except (BrokenPipeError, EOFError, OSError):
             reply = None
@@ -261,7 +261,7 @@ class LiberoSim:
 
     def close(self) -> None:
         if self.server.poll() is None:
-            self.server.stdin.close()  # type: ignore[union-attr]
+            self.server.stdin.close()
             try:
                 self.server.wait(timeout=30)
             except subprocess.TimeoutExpired:

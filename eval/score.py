@@ -158,7 +158,7 @@ def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[s
         if int(log["row"]) in starts:
             offs = [_off(start, ee[0], objects) for start in starts[int(log["row"])]]
             if all(off is not None for off in offs):
-                name, where = offs[0]  # type: ignore[misc]
+                name, where = offs[0]
                 raise LogError(
                     f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}) "
                     "nor where reset() leaves it after the settle steps; log step 0 before any action"

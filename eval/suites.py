@@ -10,7 +10,7 @@ rollouts and all: a killed run continues with resume=true), and `out` gets one r
 per suite with its task rate, obeyed name, true target, occ and nonsense, each with k/n and the
 interval that resamples trials (report.json, report.md), and a picture with one bar group per
 suite (suites.png). `suites=all` takes every suite of `world` whose files are installed and
-whose tasks our skills can do (the README lists them, and why the others are not).
+whose tasks our skills can do (docs/LIBERO.md lists them, and why the others are not).
 """
 
 from __future__ import annotations

@@ -57,7 +57,7 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
     try:
         with initialize(version_base=None, config_path=None):
             cfg = compose(config_name=name, overrides=argv)
-        return OmegaConf.to_object(cfg)  # type: ignore[return-value]
+        return OmegaConf.to_object(cfg)
     except (HydraException, OmegaConfBaseException, ValueError, TypeError) as exc:
         raise UserError(_one_line(exc, schema)) from None
 

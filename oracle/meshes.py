@@ -2,7 +2,7 @@
 
 robosuite's Panda, gripper and mount are drawn with ~170,000 triangles; at the 96-224 px our
 cameras render, most are smaller than a pixel, and on the CPU rasteriser (llvmpipe) they were
-about 80% of a frame's cost (README: Performance). Every purely visual mesh (a geom that
+about 80% of a frame's cost (docs/GENERATE.md: Performance). Every purely visual mesh (a geom that
 collides with nothing) of the robot above `MAX_FACES` triangles is decimated (quadric edge
 collapse, deterministic) to that many and written inline into the MJCF. LIBERO's scanned
 objects are textured meshes of 14,000-66,000 triangles each (`objects=True`): they are cut to

@@ -1,7 +1,7 @@
 """The dataset's cameras, rendered on the CPU with the fast settings.
 
 MuJoCo's defaults (4x MSAA, shadows, reflections, collision geoms) cost about 4x more per frame
-on llvmpipe; none of them helps a policy (README: rendering). A scene of the full look
+on llvmpipe; none of them helps a policy (docs/GENERATE.md: Performance). A scene of the full look
 (core/spec.py) draws reflections, as its world's own simulator does. Cameras are the scene's profile's
 (core/layout.py), and a profile whose frames are stored mirrored gets them mirrored here.
 """

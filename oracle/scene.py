@@ -135,7 +135,7 @@ def _mirror_plates(root: ET.Element, world: worlds.World) -> None:
     names = {f"{p.name}_{p.fixture.mirror}" for p in world.fixtures if p.fixture.mirror}
     if not names:
         return
-    ET.SubElement(root.find("asset"), "material", {"name": "mirror_top", **MIRROR_LOOK})  # type: ignore[arg-type]
+    ET.SubElement(root.find("asset"), "material", {"name": "mirror_top", **MIRROR_LOOK})
     for body in root.iter("body"):
         for geom in body.findall("geom"):
             if geom.get("name") in names:
@@ -148,7 +148,7 @@ def _mirror_plates(root: ET.Element, world: worlds.World) -> None:
 
 def _servo_and_gravcomp(root: ET.Element) -> None:
     """Arm torque motors -> position servos (torque limits kept); gravity-compensate the robot."""
-    for i, motor in enumerate(root.find("actuator").findall("motor")):  # type: ignore[union-attr]
+    for i, motor in enumerate(root.find("actuator").findall("motor")):
         torque = motor.attrib.pop("ctrlrange")
         motor.tag = "position"
         motor.set("ctrllimited", "false")
@@ -172,7 +172,7 @@ def _configure(root: ET.Element, world: worlds.World) -> None:
     quality = visual.find("quality")
     if quality is None:
         quality = ET.SubElement(visual, "quality")
-    quality.set("offsamples", "0")  # no MSAA: the CPU rasteriser's main cost (README)
+    quality.set("offsamples", "0")  # no MSAA: the CPU rasteriser's main cost (docs/GENERATE.md: Performance)
     glob = visual.find("global")
     if glob is None:
         glob = ET.SubElement(visual, "global")
@@ -450,7 +450,7 @@ class Scene:
 
     def positions(self) -> dict[str, tuple[float, float, float]]:
         """Where every object of the episode is now."""
-        return {k: tuple(float(v) for v in self.object_pos(k)) for k in self.placed}  # type: ignore[misc]
+        return {k: tuple(float(v) for v in self.object_pos(k)) for k in self.placed}
 
     def object_yaw(self, object_id: str) -> float:
         """How far the object is turned about the world's z from its resting orientation."""

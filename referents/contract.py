@@ -60,7 +60,7 @@ def _no_words(cfg: ReferentConfig) -> tuple[str, ...]:
 
 def nearest_canonical(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     """The instruction-blind shortcut: pick up whatever stands nearest the canonical slot."""
-    x, y = cfg.layout.slots[cfg.layout.canonical_slot]  # type: ignore[index]
+    x, y = cfg.layout.slots[cfg.layout.canonical_slot]
     nearest = min(spec.objects, key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y))
     return replace(spec, target=nearest.id, task=TaskSpec(program="pick"))
 
@@ -102,7 +102,7 @@ class TypeModule:
             kinds = worlds.world(cfg.world).kinds
             if not isinstance(pair[0], str) or pair[0] not in kinds:
                 raise cfg.fail("assets", f"unknown kind {pair[0]!r} {where}; known: {', '.join(sorted(kinds))}")
-        inventory = tuple(sorted(pairs))  # type: ignore[arg-type]
+        inventory = tuple(sorted(pairs))
         twice = [kind for kind, n in Counter(kind for kind, _ in inventory).items() if n > 1]
         if twice:
             raise cfg.fail("assets", f"kind {twice[0]!r} is listed twice {where}")

@@ -287,7 +287,7 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
             raise ValueError("jitter is a distance: 0 or more")
         canonical = raw.get("canonical_slot", 0)
         canonical = {str(k): int(v) for k, v in canonical.items()} if isinstance(canonical, dict) else int(canonical)
-        layout = Layout(slots, jitter, yaw, canonical)  # type: ignore[arg-type]
+        layout = Layout(slots, jitter, yaw, canonical)
     except (TypeError, ValueError):
         raise fail(
             "layout",

@@ -1,4 +1,4 @@
-"""A dataset's first frames, one per referent type, each under its instruction (the README's picture
+"""A dataset's first frames, one per referent type, each under its instruction (docs/GENERATE.md's picture
 of a mixed dataset): `python scripts/first_frames.py <dataset> [camera=] [out=<dataset>-first_frames.png]`.
 
 What a policy sees at the start of an episode of each type, and what it is told: the quickest

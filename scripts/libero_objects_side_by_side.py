@@ -1,7 +1,7 @@
 """The objects our LIBERO worlds drew least like LIBERO, close up: LIBERO's own frame, ours at an
 earlier revision, ours now in the fast look and in the full look (`look=full`, core/spec.py), side
 by side, each with its mean absolute difference from LIBERO's inside the object's own pixels (the
-README's picture, docs/libero_objects_side_by_side.png):
+docs/LIBERO.md's picture, docs/libero_objects_side_by_side.png):
 `python scripts/libero_objects_side_by_side.py [before=4a9eaf0] [out=docs/libero_objects_side_by_side.png]`.
 
 `before` is a git revision: its tree is exported to a temporary folder and this script renders our

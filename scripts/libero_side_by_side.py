@@ -1,4 +1,4 @@
-"""LIBERO's own frames and ours at the same initial state of a LIBERO suite, side by side (the README's
+"""LIBERO's own frames and ours at the same initial state of a LIBERO suite, side by side (docs/LIBERO.md's
 picture): `python scripts/libero_side_by_side.py [world=libero_object] [task=0] [state=0] [out=docs/<world>_side_by_side.png]`.
 
 Both cameras, as a policy sees them (LIBERO's frames turned 180 degrees, as lerobot's

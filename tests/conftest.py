@@ -1,10 +1,12 @@
 """Shared fixtures (one small generated dataset per test session, made by the real pipeline) and
-the fast lane: `make test-fast` runs the tests marked `fast` — the pure core, planning, the audit
-and the command lines, nothing that simulates — in a few minutes; `make test` runs everything."""
+the lanes, one folder each: tests/fast simulates nothing (the pure core, planning, the audit, the
+command lines: `make test-fast`, a few minutes), tests/sim runs our simulator, tests/libero checks
+LIBERO's worlds against LIBERO's own environment; `make test` runs them all."""
 
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,17 +15,15 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
+sys.path.insert(0, str(Path(__file__).parent))  # helpers.py and hubserver.py, for every lane's tests
 from helpers import make_dataset  # noqa: E402
 
-# Modules whose tests simulate nothing (a test among them that does is marked `slow`).
-FAST_MODULES = {
-    "test_spec", "test_vocabulary", "test_plan", "test_shape", "test_fuzz", "test_referent_specs", "test_cli", "test_reader",
-}  # fmt: skip
+LANES = ("fast", "sim", "libero")  # tests/<lane>/: the folder decides a test's lane
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "fast: simulator-free; part of `make test-fast`")
-    config.addinivalue_line("markers", "slow: simulates or trains, though its module is in the fast lane")
+    for lane in LANES:
+        config.addinivalue_line("markers", f"{lane}: a test of tests/{lane}/")
 
 
 # The longest test files first: `make test` runs files side by side on two cores (xdist --dist
@@ -36,8 +36,9 @@ LONGEST_FIRST = (
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
-        if item.module.__name__ in FAST_MODULES and not item.get_closest_marker("slow"):
-            item.add_marker(pytest.mark.fast)
+        lane = item.path.parent.name
+        if lane in LANES:
+            item.add_marker(getattr(pytest.mark, lane))
     rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
     items.sort(key=lambda item: rank.get(item.module.__name__, len(rank)))  # stable: a file's tests keep their order
 

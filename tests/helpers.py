@@ -25,17 +25,17 @@ from oracle.scene import Scene, scene_for
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
-from libero_reference import named, object_differences  # noqa: E402  (the same readout in the tests and the README's picture)
+from libero_reference import named, object_differences  # noqa: E402  (the same readout in the tests and the pictures in docs/)
 
 LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
 # LIBERO's initial states per task the picture tests compare (each a render in LIBERO's env and in
-# ours): 2 in `make test`; the README's figures, over the first 5, with LIBERO_PICTURE_STATES=5.
+# ours): 2 in `make test`; the figures in docs/, over the first 5, with LIBERO_PICTURE_STATES=5.
 PICTURE_STATES = int(os.environ.get("LIBERO_PICTURE_STATES", "2"))
 # LIBERO's initial states per task each world's canonical-exam test builds: the first 10 (drawn with
 # the exam's seed) in `make test`; all 50 (every state of the suite loads) with LIBERO_CANONICAL_STATES=50.
 CANONICAL_STATES = int(os.environ.get("LIBERO_CANONICAL_STATES", "10"))
 # Episodes each LIBERO world's replay test generates and replays in LIBERO's environment (one may
-# fail): 10 in `make test`; the README's figures are over 20 (LIBERO_REPLAYS=20).
+# fail): 10 in `make test`; the figures in docs/ are over 20 (LIBERO_REPLAYS=20).
 REPLAYS = int(os.environ.get("LIBERO_REPLAYS", "10"))
 FRAME_BOUND = 4.0  # mean absolute difference (of 255) of a whole frame from LIBERO's
 OBJECT_BOUND = 12.0  # ... and inside each object's and fixture's own pixels (a whole frame's mean hides one drawn wrong)
@@ -71,7 +71,7 @@ class Pictures:
     def check(self, bounds: Mapping[str, float] | None = None) -> None:
         """Every whole frame within FRAME_BOUND, every object and fixture within OBJECT_BOUND, or
         its kind's own bound in `bounds` (LIBERO's category: `akita_black_bowl` for
-        `akita_black_bowl_2`) where our fast rendering cannot reach it (README); a failure names
+        `akita_black_bowl_2`) where our fast rendering cannot reach it (docs/LIBERO.md); a failure names
         the thing farthest over its bound."""
         for camera in LIBERO.cameras:
             worst = ", ".join(f"{name} {figure:.1f} ({where})" for name, figure, where in self.worst(camera))

@@ -365,7 +365,7 @@ def plot(results: dict, path: Path) -> None:
     bars([r["faces"]["obeyed_name"] for r in rows], -0.18, "one LoRA, all axes", "tab:blue")
     shortcut = [(r.get("baseline") or {}).get("obeyed_name") for r in rows]
     if all(shortcut):
-        bars(shortcut, 0.18, "position shortcut", "tab:gray")  # type: ignore[arg-type]
+        bars(shortcut, 0.18, "position shortcut", "tab:gray")
     for i, r in enumerate(rows):
         ax.hlines(r["faces"]["obeyed_name"]["chance"], i - 0.4, i + 0.4, colors="k", linestyles=":")
     loo = results.get("loo")

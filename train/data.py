@@ -186,8 +186,8 @@ def union(parts: list[Frames]) -> Frames:
         starts=np.concatenate([p.starts + off for p, off in zip(parts, frame_offsets)]),
         ends=np.concatenate([p.ends + off for p, off in zip(parts, frame_offsets)]),
         stats=_pooled({STATE_KEY: [p.state for p in parts], ACTION_KEY: [p.action for p in parts]}),
-        target=None if any(t is None for t in targets) else np.concatenate(targets),  # type: ignore[arg-type]
-        target_world=None if any(w is None for w in scene_worlds) else np.concatenate(scene_worlds),  # type: ignore[arg-type]
+        target=None if any(t is None for t in targets) else np.concatenate(targets),
+        target_world=None if any(w is None for w in scene_worlds) else np.concatenate(scene_worlds),
         source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
         sources=[s for p in parts for s in p.sources],
         profile=parts[0].profile,

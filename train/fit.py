@@ -8,7 +8,7 @@ normalised actions, masked past the episode's end). With `point_weight`, the age
 first keypoint map is also taught where the named object is in the picture (its scene position
 seen through the world's camera, shifted with the image), on the frames before the gripper first
 closes: a dense signal that finds the named object where the auxiliary head's three numbers did
-not (LIBERO-Object's small groceries, README). The learning rate can warm up over
+not (LIBERO-Object's small groceries, docs/RESULTS_LIBERO.md). The learning rate can warm up over
 `warmup` steps and then follow a cosine to `lr_floor` of its peak at the last step, over every
 step after the warm-up or, with `decay`, only the last `decay` steps (a constant rate, then a
 cool-down: the run can be extended and cooled again, see `resume`). Floor 1 keeps it constant.
@@ -105,7 +105,7 @@ def model_config(cfg: TrainConfig, frames: data.Frames) -> ModelConfig:
         lora_alpha=cfg.lora.alpha or 2 * rank,
         feed_located=cfg.feed_located,
         profile=frames.profile,
-        locate_origin=centre,  # type: ignore[arg-type]
+        locate_origin=centre,
     )
 
 

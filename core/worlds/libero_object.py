@@ -37,7 +37,7 @@ WORLD = World(
     park_z=-1.0,  # under the floor: out of view and out of contact
     builder="libero",
     # The Panda's visual meshes at 600 triangles each instead of 2,000: a fifth less time per frame,
-    # and LIBERO's own frames still within 2.9/255 (agentview) and 3.2/255 (wrist) (README).
+    # and LIBERO's own frames still within 2.9/255 (agentview) and 3.2/255 (wrist) (docs/LIBERO.md).
     robot_faces=600,
     mount=None,
     integrator="Euler",  # robosuite's default, which LIBERO keeps

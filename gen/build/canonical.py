@@ -175,7 +175,8 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
     assert referent.code.canonical is not None
     design = referent.code.canonical(referent.config, problem)
     if design is None:
-        return f"our skills cannot do it ({problem.goal[0][0]} {' '.join(problem.goal[0][1:])}: see the README's coverage)"
+        goal = f"{problem.goal[0][0]} {' '.join(problem.goal[0][1:])}"
+        return f"our skills cannot do it ({goal}: docs/LIBERO.md says which tasks each world covers)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
     if not carried_kind.is_site and not carried_kind.graspable():

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
-from core.products import PREVIEW_PATH
+from core.products import CARD_PATH, PREVIEW_PATH
 from gen.build.provenance import Provenance
 from referents.registry import Referent
 from referents.schema import ReferentConfig
@@ -85,7 +85,7 @@ def write(root: Path, audited: Sequence[tuple[Referent, dict]], provenance: Prov
         else ""
     )
     text = _one(*audited[0], provenance, contents, sheet) if len(audited) == 1 else _mix(audited, provenance, contents, sheet)
-    (root / "README.md").write_text(text)
+    (root / CARD_PATH).write_text(text)
 
 
 def _vocabulary(rc: ReferentConfig) -> str:
@@ -235,7 +235,7 @@ occur in a training split). Each trial holds the pixels, scene and robot pose fi
 one word. Files: `exam.json` (format, scoring parameters, object geometry, referent spec, audit),
 `trials.parquet` (one row per rollout: what a policy may see — scene, initial state, instruction)
 and `answers.parquet` (the answer key, for the scorer only); the format is documented in the
-generator's `core/exam.py` and README.
+generator's `core/exam.py` and docs/EXAM_FORMAT.md.
 
 | face | meaning |
 |---|---|
@@ -262,4 +262,4 @@ logs with `python -m eval.score exam=<this folder> logs=<rollouts.parquet>`.
 ```
 """
     )
-    (root / "README.md").write_text(text)
+    (root / CARD_PATH).write_text(text)

@@ -50,7 +50,7 @@ class Producer:
         self.referent = referent
         self.sim = sim
         self.codec = codec
-        inventory = assets if assets is not None else referent.assets()  # type: ignore[union-attr]
+        inventory = assets if assets is not None else referent.assets()
         self.scene: Scene = scene_for(inventory, sim.profile, sim.world, sim.look)
         self.ik = ArmIK(np.asarray(sim.robot_home), sim.world)
         self._cameras: Cameras | None = None  # made on first use: exams never render

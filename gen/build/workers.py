@@ -141,7 +141,7 @@ def _ray(job: Job, plan: list[Design], workers: int, start: int) -> Iterator[Pro
         def produce(self, index: int, design: Design) -> Produced:
             return _produce(index, design)
 
-    pool = ActorPool([Worker.remote(job) for _ in range(max(1, workers))])  # type: ignore[attr-defined]
+    pool = ActorPool([Worker.remote(job) for _ in range(max(1, workers))])
     try:
         yield from pool.map(lambda actor, item: actor.produce.remote(*item), [(i, plan[i]) for i in range(start, len(plan))])
     except ray.exceptions.RayActorError as exc:

@@ -2,7 +2,7 @@
 suite's own initial states and objects in our LIBERO worlds, the perturbed instruction delivered
 (LIBERO-PRO writes it only in each BDDL file's `(:language)` line, under the base task's file
 name), checked against LIBERO's own render of the suite, and the reference policies' signature
-across suites (`python -m eval.suites`). The README's figures come from the commands it lists."""
+across suites (`python -m eval.suites`). The figures in docs/ come from the commands they list."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from helpers import initial_state_pictures
 from jobs.cli import UserError
 
 BASES = ("libero_object", "libero_spatial", "libero_goal")
-EVERY = bool(os.environ.get("LIBERO_PRO_ALL"))  # the README's figures: every covered suite and task
+EVERY = bool(os.environ.get("LIBERO_PRO_ALL"))  # the figures in docs/: every covered suite and task
 # One suite of each kind of perturbation, for the pictures: moved, recoloured and resized, added, shifted.
 SAMPLED = (
     "libero_object_swap", "libero_object_object", "libero_object_with_mug", "libero_object_with_yellow_book",
@@ -35,7 +35,7 @@ SAMPLED = (
 # draws farthest from LIBERO's (the stove under the swapped bowls; the bigger bowl close to the wrist camera)
 FULL_SAMPLED = ("libero_spatial_swap", "libero_goal_object")
 TASKS_PICTURED = 10 if EVERY else 2
-# Things the fast look cannot bring within helpers.OBJECT_BOUND (README "Each object and fixture as
+# Things the fast look cannot bring within helpers.OBJECT_BOUND (docs/LIBERO.md "Each object and fixture as
 # LIBERO draws it"): the woven baskets, the mirror stove top and the bowls close to the wrist camera.
 OWN_BOUNDS = {"basket": 28.0, "red_basket": 28.0, "flat_stove": 40.0, "akita_black_bowl": 21.0, "black_bowl": 21.0}
 
@@ -52,7 +52,6 @@ def _covered() -> list[str]:
     return names
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("kind", ["_lan", "_task"])
 def test_the_perturbed_instruction_is_delivered(kind: str) -> None:
     """For every covered `_lan` and `_task` suite, each task row's instruction is the BDDL file's
@@ -67,7 +66,6 @@ def test_the_perturbed_instruction_is_delivered(kind: str) -> None:
             assert spec.instruction.lower() != libero.language(task).lower(), (name, task)
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("kind", ["_lan", "_task"])
 def test_each_swap_changes_only_the_name_in_the_delivered_instruction(kind: str) -> None:
     """A swap is the task row's own words with what names the target changed (the suite's wording
@@ -98,7 +96,6 @@ def test_each_swap_changes_only_the_name_in_the_delivered_instruction(kind: str)
     assert kept > 0
 
 
-@pytest.mark.fast
 def test_suites_that_change_no_words_deliver_the_base_tasks_instruction() -> None:
     """A suite that moves, recolours or adds objects keeps the base task's words (LIBERO's file-name
     instruction, what LIBERO-trained policies were trained on)."""
@@ -109,7 +106,6 @@ def test_suites_that_change_no_words_deliver_the_base_tasks_instruction() -> Non
             assert spec.instruction == libero.language(libero.base_task(name, task)), (name, task)
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize(
     ("argv", "needle"),
     [
@@ -185,7 +181,7 @@ def test_the_same_pictures_and_poses_as_liberos_own_render_of_the_suite(name: st
 
 @pytest.mark.parametrize("name", ["libero_object_object", "libero_spatial_object"])
 def test_the_oracle_does_the_perturbed_tasks_and_obeys_their_swaps(name: str, tmp_path: Path) -> None:
-    """On the suite's own states (the first state of its first two tasks here; the README's figures:
+    """On the suite's own states (the first state of its first two tasks here; the figures in docs/:
     every covered suite, 5 states a task) the oracle does every task row and obeys every swap."""
     build(CanonicalOptions(suite=name, states=1, image_size=32, out=str(tmp_path / name), tasks=2))
     exam = read(tmp_path / name)
@@ -194,7 +190,6 @@ def test_the_oracle_does_the_perturbed_tasks_and_obeys_their_swaps(name: str, tm
     assert faces["task"]["rate"] == 1.0 and faces["obeyed_name"]["rate"] == 1.0, faces
 
 
-@pytest.mark.fast
 def test_one_command_reports_a_row_per_suite(tmp_path: Path) -> None:
     """`python -m eval.suites` refuses an unknown suite in one line before any work."""
     done = subprocess.run(

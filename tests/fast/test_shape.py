@@ -9,7 +9,7 @@ from pathlib import Path
 
 from core.layout import LAYOUTS
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts/import_graph.py"
 PACKAGES = ("core", "jobs", "referents", "oracle", "gen", "eval", "train", "bench")
 

@@ -23,7 +23,7 @@ from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
 from helpers import make_dataset
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

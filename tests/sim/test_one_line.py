@@ -22,7 +22,7 @@ from gen.planning.plan import default_sim, plan
 from helpers import make_dataset
 from referents import registry
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 EXAM_FORMAT_DOC = ROOT / "docs" / "EXAM_FORMAT.md"
 
 
@@ -61,7 +61,6 @@ def untouched(folder: Path) -> bool:
 # --- item 9: a negative seed -------------------------------------------------------------------
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize(
     "argv",
     [
@@ -89,7 +88,6 @@ def plan_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-@pytest.mark.fast
 def test_preview_refuses_a_folder_or_a_name_it_cannot_write_as_out(plan_folder: Path, kept: Path, tmp_path: Path) -> None:
     line = one_line(run("gen.preview", str(plan_folder), f"out={kept}"))
     assert f"out={kept} is a folder" in line and ".png" in line, line
@@ -102,13 +100,11 @@ def test_preview_refuses_a_folder_or_a_name_it_cannot_write_as_out(plan_folder: 
 # --- item 15: what gen.check, objects_per_scene=, world= and --help say ------------------------
 
 
-@pytest.mark.fast
 def test_check_says_a_plan_is_a_plan(plan_folder: Path) -> None:
     line = one_line(run("gen.check", str(plan_folder)))
     assert "is a plan (plan_only=true)" in line and "info.json" not in line, line
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize(
     ("argv", "needles"),
     [
@@ -137,7 +133,6 @@ def test_an_option_the_referent_cannot_take_is_named_with_what_it_takes(argv: li
     assert untouched(kept)
 
 
-@pytest.mark.fast
 def test_gen_help_explains_every_option() -> None:
     shown = run("gen", "--help")
     rows = {m[1]: m[2] for m in re.finditer(r"^  (\w+)=\S*(?:\s{2,}(.*))?$", shown.stdout, re.M)}
@@ -150,7 +145,6 @@ def test_gen_help_explains_every_option() -> None:
 # --- items 14 and 15: the exam format doc ------------------------------------------------------
 
 
-@pytest.mark.fast
 def test_the_exam_format_doc_has_every_program_and_every_worlds_frame() -> None:
     predicates = doc_section("Success predicates")
     assert all(f"`{program}`" in predicates for program in success.PREDICATES), predicates
@@ -161,7 +155,6 @@ def test_the_exam_format_doc_has_every_program_and_every_worlds_frame() -> None:
         assert name in rows and re.search(rf"z = {re.escape(height)}(?![\d.])", rows[name]), (name, height)
 
 
-@pytest.mark.fast
 def test_the_exam_format_doc_says_the_face_is_readable_and_achieved_is_the_answers() -> None:
     observations = doc_section("Observations and actions")
     assert "`achieved`" in observations and "reward" in observations and "never as the policy's input" in observations
@@ -169,7 +162,6 @@ def test_the_exam_format_doc_says_the_face_is_readable_and_achieved_is_the_answe
     assert "face of every row is readable" in trials and f"`{'xxx'}`" in trials
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("name", registry.available())
 def test_a_scenes_object_order_is_the_scenes_not_the_answers(name: str) -> None:
     """The objects of a trial's public scene come in slot order or in one fixed order of their

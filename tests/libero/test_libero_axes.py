@@ -4,7 +4,7 @@ with the world's objects brought by a data file (referents/in_worlds/<world>/<ty
 against LIBERO's own environment as the three LIBERO worlds are: the same pictures at generated
 states, recorded actions LIBERO's `check_success()` accepts, the audit, lerobot's loader, and each
 exam's reference policies. One small dataset mixing the five types (gen/mix.py) serves the
-replays and the pictures; the README's figures come from the commands it lists (n=20 replays,
+replays and the pictures; the figures in docs/ come from the commands it lists (n=20 replays,
 n=100 first tries, 5 states of pictures per type)."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from lerobot.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+from lerobot.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core import worlds
 from core.exam import read
@@ -36,16 +36,15 @@ from referents import registry
 
 AXES = {"category": "libero_object", "negation": "libero_object", "composition": "libero_object", "ordinal": "libero_object"}
 AXES |= {"color": "libero_spatial"}
-# Episodes of each type in the mixed dataset the replays use (the README's figures: 20, with
-# LIBERO_AXES_EPISODES=20), and the first PICTURE_STATES of them the pictures compare (README: 5)
+# Episodes of each type in the mixed dataset the replays use (the figures in docs/: 20, with
+# LIBERO_AXES_EPISODES=20), and the first PICTURE_STATES of them the pictures compare (docs/LIBERO.md: 5)
 PER_TYPE = int(os.environ.get("LIBERO_AXES_EPISODES", "2"))
-# Things our fast rendering cannot bring within helpers.OBJECT_BOUND (README "Each object and fixture
+# Things our fast rendering cannot bring within helpers.OBJECT_BOUND (docs/LIBERO.md "Each object and fixture
 # as LIBERO draws it"): LIBERO-Object's woven basket, LIBERO-Spatial's mirror stove top and the bowls
 # close to the wrist camera.
 OWN_BOUNDS = {"basket": 28.0, "flat_stove": 40.0, "akita_black_bowl": 21.0, "red_akita_black_bowl": 21.0, "yellow_bowl": 21.0}
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("name", sorted(AXES))
 def test_each_axis_is_its_types_own_design_in_a_liberos_scene(name: str) -> None:
     """The spec is the type's (its module designs it), laid out in the LIBERO world with LIBERO's
@@ -66,7 +65,6 @@ def test_each_axis_is_its_types_own_design_in_a_liberos_scene(name: str) -> None
     assert not audit(referent, specs)["leaks"]
 
 
-@pytest.mark.fast
 def test_the_axis_a_liberos_type_is_is_that_type() -> None:
     """`referent=object world=libero_object` is what `referent=libero_object` makes (and relation,
     goal: LIBERO-Spatial's and LIBERO-Goal's types)."""
@@ -76,7 +74,6 @@ def test_the_axis_a_liberos_type_is_is_that_type() -> None:
         assert registry.own_name(axis, own) == (own, None)
 
 
-@pytest.mark.fast
 def test_a_type_a_world_cannot_carry_is_refused_naming_those_that_can(tmp_path: Path) -> None:
     out = tmp_path / "out"
     done = subprocess.run(
@@ -109,7 +106,7 @@ def test_lerobot_reads_it_and_every_types_written_audit_finds_no_leak(mixed: Pat
 def test_recorded_actions_succeed_in_liberos_own_environment(mixed: Path, world: str, tmp_path: Path) -> None:
     """Each episode of the world rebuilt in LIBERO's own environment from its record alone (its
     objects at their recorded poses, the fixtures where ours stand, the goal the instruction asks
-    for): LIBERO's `check_success()` accepts the recorded actions (the README's figures: n=20 per type)."""
+    for): LIBERO's `check_success()` accepts the recorded actions (the figures in docs/: n=20 per type)."""
     request = liberos_replay(mixed, worlds.world(world))
     results = json.loads(liberos_own("replay", request, tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core import contact, libero, worlds
 from core.exam import read
@@ -37,12 +37,12 @@ from oracle.skills import CARRY_MARGIN
 from referents import registry
 
 SUITE = "libero_goal"
-# Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the stove's
+# Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (docs/LIBERO.md): the stove's
 # mirror top (16/255 agentview) and the black bowl's decimated mesh (13/255 agentview). The full look
 # draws every thing within it.
 OWN_BOUNDS = {"flat_stove": 17.0, "akita_black_bowl": 14.0}
 ASSETS = (("akita_black_bowl", 1), ("cream_cheese", 1), ("plate", 1), ("wine_bottle", 1))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 

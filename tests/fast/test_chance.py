@@ -55,7 +55,6 @@ def _logs(exam: Exam, land_on: dict[int, str]) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("name,world", CASES, ids=[f"{n}@{w}" for n, w in CASES])
 def test_chance_is_one_over_what_the_hand_can_land_on(name: str, world: str) -> None:
     exam, specs = _exam(name, world)
@@ -69,7 +68,6 @@ def test_chance_is_one_over_what_the_hand_can_land_on(name: str, world: str) -> 
     assert report["faces"]["obeyed_name"]["chance"] == pytest.approx(float(np.mean(expected)), abs=1e-4)
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize("world", registry.worlds_of("negation"))
 def test_a_landing_on_the_object_no_swap_names_is_a_distractors(world: str) -> None:
     """Negation's fourth object (the other shape in the other color) is never an alternative: a hand

@@ -73,7 +73,7 @@ def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pyt
     oracle, position, nothing = reports["oracle"]["faces"], reports["position"]["faces"], reports["nothing"]["faces"]
     assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["true_target"]["rate"] <= 0.05
     assert oracle["task"]["rate"] >= 0.95
-    # the oracle reads the spec, not the cameras: blanking them cannot hurt it (README: what occ proves)
+    # the oracle reads the spec, not the cameras: blanking them cannot hurt it (docs/EXAMS.md: what occ proves)
     assert oracle["occ"]["rate"] == oracle["task"]["rate"]
     lo, hi = position["obeyed_name"]["ci"]
     assert lo <= position["obeyed_name"]["chance"] <= hi

@@ -64,7 +64,6 @@ def tenth_type(folder: Path, module: str = MODULE, spec: dict | None = None) -> 
     return path
 
 
-@pytest.mark.fast
 def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Path) -> None:
     path = tenth_type(tmp_path)
     ref = registry.load("ignored", str(path))
@@ -77,7 +76,6 @@ def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Pa
         registry.demo_of("size")
 
 
-@pytest.mark.fast
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
@@ -96,7 +94,6 @@ def test_a_module_outside_the_contract_is_refused_in_one_line(tmp_path: Path, ed
     assert "\n" not in str(error.value)
 
 
-@pytest.mark.fast
 def test_a_scene_beyond_the_inventory_fails_before_simulating(tmp_path: Path) -> None:
     spec = {**SPEC, "objects": [*SPEC["objects"], {"kind": "block_small", "name": "block", "attributes": {"size": "tiny"}}]}
     path = tenth_type(tmp_path, MODULE + assets_def([("block_small", 1), ("block_large", 1)]), {**spec, "objects_per_scene": 3})
@@ -105,7 +102,6 @@ def test_a_scene_beyond_the_inventory_fails_before_simulating(tmp_path: Path) ->
         designs(ref, 4, seed=0)
 
 
-@pytest.mark.fast
 def test_a_module_beside_the_spec_cannot_redefine_a_builtin_type(tmp_path: Path) -> None:
     path = tenth_type(tmp_path, MODULE, {**SPEC, "type": "object"})
     (tmp_path / "object.py").write_text(MODULE)
@@ -113,7 +109,6 @@ def test_a_module_beside_the_spec_cannot_redefine_a_builtin_type(tmp_path: Path)
         registry.load("object", str(path))
 
 
-@pytest.mark.fast
 def test_the_command_line_names_the_stray_module_name(tmp_path: Path) -> None:
     path = tenth_type(tmp_path, MODULE.replace("def design(", TYPO + "def design("))
     result = subprocess.run([sys.executable, "-m", "gen", f"spec={path}", f"out={tmp_path / 'out'}", "n=4"], capture_output=True)

@@ -129,7 +129,7 @@ def test_out_cannot_be_the_current_folder(tmp_path: Path) -> None:
     assert not any(tmp_path.iterdir())
 
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 # Every command line, and whether it takes a folder as its positional argument.
 ENTRY_POINTS = [
     ("gen", False),
@@ -250,7 +250,7 @@ def test_a_large_plan_shows_its_progress(tmp_path: Path) -> None:
 def test_help_says_where_an_exam_goes_by_default() -> None:
     shown = run_gen("--help")
     assert "default datasets/<referent>, or datasets/<referent>-<world> in another world (exam: ...-exam)" in shown.stdout
-    options = (Path(__file__).resolve().parent.parent / "docs" / "GENERATE.md").read_text()
+    options = (Path(__file__).resolve().parents[2] / "docs" / "GENERATE.md").read_text()
     row = "`datasets/<referent>`, `datasets/<referent>-<world>` in another world than its own (`-exam` added with `split=exam`)"
     assert row in options
 

@@ -201,7 +201,7 @@ def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_pat
         [sys.executable, "-m", "eval.serve", f"policy=ckpt:{checkpoint}", "port=0"], stdout=subprocess.PIPE, text=True
     )
     try:
-        line = server.stdout.readline()  # type: ignore[union-attr]
+        line = server.stdout.readline()
         assert line.startswith("serving"), line
         address = line.strip().rsplit("ws://", 1)[1]
         exam = read(make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=64"))

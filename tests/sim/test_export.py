@@ -15,7 +15,7 @@ import pytest
 
 from gen.lerobot.reader import LeRobotReader
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 V21_PYTHON = ROOT / ".venv-v21" / "bin" / "python"
 
 # Runs in .venv-v21: everything lerobot 0.3.3 hands a trainer, saved for the comparison.

@@ -15,7 +15,7 @@ import pytest
 
 from helpers import make_dataset
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 ANSWER = {"target", "program", "face", "variant", "spec", "alternatives", "original_target", "counterfactuals"}
 
 

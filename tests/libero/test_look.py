@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY

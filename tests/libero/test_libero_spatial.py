@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core import libero, worlds
 from core.exam import read
@@ -36,11 +36,11 @@ from oracle.scene import scene_for
 from referents import registry
 
 SUITE = "libero_spatial"
-# Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the stove's
+# Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (docs/LIBERO.md): the stove's
 # mirror top, where LIBERO shows the robot and the bowls reflected (38/255 agentview), and the black
 # bowls' decimated meshes close to the wrist camera (19/255). The full look draws every thing within it.
 OWN_BOUNDS = {"flat_stove": 40.0, "akita_black_bowl": 21.0}
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 
@@ -100,8 +100,8 @@ def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Pa
     """Each episode rebuilt in LIBERO-Spatial's own scene from its record alone (LIBERO's instance
     names, poses, robot joints; the fixtures where our world stands them), its recorded actions
     stepped there: LIBERO's own check_success() (`On(bowl, plate)`) accepts at least 90% (20/20 of
-    the README's 20 when this was written; bowls on the stove rest 3 mm lower under the reference's
-    MuJoCo 3.17 than under our 3.9: README)."""
+    the 20 of docs/LIBERO.md when this was written; bowls on the stove rest 3 mm lower under the reference's
+    MuJoCo 3.17 than under our 3.9: docs/LIBERO.md)."""
     results = json.loads(liberos_own("replay", liberos_replay(spatial_dataset, world), tmp_path / "replay.json").read_text())
     succeeded = sum(r["success"] for r in results)
     print(f"LIBERO's check_success() accepted {succeeded}/{len(results)}")
@@ -125,9 +125,9 @@ def test_a_libero_spatial_dataset_loads_and_the_audit_finds_no_leak(spatial_data
 
 
 def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
-    """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in the README's run);
+    """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in docs/LIBERO.md's run);
     on the first state of each task the oracle completes the task
-    rows (49/50 over the first 5 states: README) and obeys the swaps, while the shortcut LIBERO's layouts reward
+    rows (49/50 over the first 5 states: docs/LIBERO.md) and obeys the swaps, while the shortcut LIBERO's layouts reward
     (`position`) completes the task rows and obeys the swaps only where two of LIBERO's tasks share
     a layout (the stove and cabinet bowls: tasks 7 and 9), going to the remembered bowl; `nothing`
     scores 0 everywhere."""

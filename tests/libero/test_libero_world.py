@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (README: torchvision)
+from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core import libero, worlds
 from core.exam import read
@@ -40,11 +40,11 @@ from oracle.scene import scene_for
 from referents import registry
 
 SUITE = "libero_object"
-# Objects the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (README): the basket's
+# Objects the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND (docs/LIBERO.md): the basket's
 # weave is geometry that its 25,000 drawn triangles keep only in part (21/255 agentview, 26.5/255 wrist).
 # The full look draws every object within it (the basket 10.7/255).
 OWN_BOUNDS = {"basket": 28.0}
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 
@@ -142,7 +142,7 @@ def test_liberos_layout_files_match_the_referent(referent: registry.Referent) ->
 
 
 def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
-    """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in the README's run);
+    """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in docs/LIBERO.md's run);
     on the first state of each task the oracle completes the task
     and obeys every rename, while the shortcut LIBERO's layouts reward (`position`) completes the
     task and obeys no rename, going to the original target; `nothing` scores 0 everywhere."""

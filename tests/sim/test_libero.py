@@ -171,8 +171,8 @@ def test_an_action_of_the_other_profile_is_refused_naming_it(tmp_path: Path) -> 
     assert set(obs) == {*LIBERO.image_keys, STATE_KEY}
     env.close()
     joint_targets = make("nothing")
-    joint_targets.reset = lambda context: None  # type: ignore[method-assign]
-    joint_targets.act = lambda observation: np.zeros(NATIVE.action_size, np.float32)  # type: ignore[method-assign]
+    joint_targets.reset = lambda context: None
+    joint_targets.act = lambda observation: np.zeros(NATIVE.action_size, np.float32)
     with pytest.raises(ProfileMismatch):
         Runner(joint_targets).run(read(root).trials.iloc[0])
 

@@ -106,9 +106,9 @@ def test_grounding_reads_the_first_frame_prediction(exam: Exam) -> None:
 
 
 def _nearest_is_target(row: object, point: list[float]) -> bool:
-    spec = EpisodeSpec.from_json(row.spec)  # type: ignore[attr-defined]
+    spec = EpisodeSpec.from_json(row.spec)
     nearest = min(spec.objects, key=lambda o: float(np.linalg.norm(np.subtract(o.pos, point))))
-    return nearest.id == row.target  # type: ignore[attr-defined]
+    return nearest.id == row.target
 
 
 def test_html_renders_tables_and_the_heat_map_shows_zero_cells(exam: Exam) -> None:
@@ -125,11 +125,11 @@ def test_html_renders_tables_and_the_heat_map_shows_zero_cells(exam: Exam) -> No
         captured.append(s)
         return original(self, x, y, s, *args, **kwargs)
 
-    plt.Axes.text = spy  # type: ignore[method-assign]
+    plt.Axes.text = spy
     try:
         plots(report)
     finally:
-        plt.Axes.text = original  # type: ignore[method-assign]
+        plt.Axes.text = original
     cells = sum(len(v) for v in report["per_slot"].values())
     assert captured.count("0%") == cells  # every 0% cell is labelled, not left blank
 
