@@ -67,23 +67,39 @@ def nearest_canonical(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
 
 @dataclass(frozen=True)
 class TypeModule:
-    """A referent type's code: the contract's names as its module defines them, defaults filled in."""
+    """A referent type's code: the contract's names as its module defines them, defaults filled in.
+    This class is the contract, written once (scripts/contract_doc.py renders it into
+    docs/REFERENTS.md). A type's module must define `design`; a world's module beside its spec of
+    the type (referents/in_worlds/<world>/<type>.py) may define any hook, replacing the type's."""
 
-    design: Callable[[ReferentConfig, Balance], Design]  # the balanced discrete choices of one episode
-    demo: Plan = pick_and_lift  # the oracle's plan
-    alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives  # the audit's choices
-    answer: Callable[[EpisodeSpec], str] = _the_target  # the id of the right alternative
-    assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets  # bodies (kind, count) to compile
-    validate: Callable[[ReferentConfig], None] = _accept  # type-specific checks of the spec; raise cfg.fail(...)
-    shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical  # what `position` demonstrates
-    named_place: Callable[[ReferentConfig, EpisodeSpec, str], EpisodeSpec] | None = (
-        None  # what `named_place` demonstrates: the name read as where its object stood (None: one place for every name)
-    )
-    canonical: Callable[[ReferentConfig, Problem], Design | None] | None = (
-        None  # a LIBERO task's own scene (gen.canonical), None for a task it cannot do
-    )
-    words: Callable[[ReferentConfig], tuple[str, ...]] = _no_words  # what else `targets=`... may name (its design honours them)
-    CONFOUNDS: tuple[str, ...] = ()  # the shortcuts `confound=` may re-introduce
+    # `design(config, balance) -> Design`: the balanced discrete choices of one episode (objects, slots,
+    # target, template, counterfactuals), each through `balance.pick` (least used, seeded ties)
+    design: Callable[[ReferentConfig, Balance], Design]
+    # `demo(skills, spec)`: the oracle's plan, a few lines over the skills of core/demo.py
+    demo: Plan = pick_and_lift
+    # `alternatives(config, spec) -> [Alternative]`: what the instruction chooses among, for the confound
+    # audit, each with the features that declare their family (referents/features.py)
+    alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives
+    # `answer(spec) -> str`: the id of the right alternative
+    answer: Callable[[EpisodeSpec], str] = _the_target
+    # `assets(config) -> [(kind, count)]`: the bodies every scene compiles
+    assets: Callable[[ReferentConfig], Iterable[tuple[str, int]]] = ReferentConfig.assets
+    # `validate(config)`: type-specific checks of the spec: `raise config.fail(field, problem)`
+    validate: Callable[[ReferentConfig], None] = _accept
+    # `shortcut(config, spec) -> EpisodeSpec`: what an instruction-blind policy does in the scene (the
+    # `position` reference policy demonstrates it)
+    shortcut: Callable[[ReferentConfig, EpisodeSpec], EpisodeSpec] = nearest_canonical
+    # `named_place(config, spec, named) -> EpisodeSpec`: what a policy does that reads the name only as
+    # where its object always stood in the confounded data (`named_place`); None: one place for every name
+    named_place: Callable[[ReferentConfig, EpisodeSpec, str], EpisodeSpec] | None = None
+    # `canonical(config, problem) -> Design | None`: a LIBERO task's own scene (gen.canonical), None for a
+    # task the type cannot do
+    canonical: Callable[[ReferentConfig, Problem], Design | None] | None = None
+    # `words(config) -> (str, ...)`: what else `targets=`, `distractor_only=` and `holdout=` may name
+    # besides the objects' names and attributes (a place), which `design` then honours
+    words: Callable[[ReferentConfig], tuple[str, ...]] = _no_words
+    # `CONFOUNDS`: the shortcuts `confound=` may re-introduce (`position`, `layout`)
+    CONFOUNDS: tuple[str, ...] = ()
 
     def inventory(self, cfg: ReferentConfig) -> tuple[tuple[str, int], ...]:
         """The bodies every scene compiles, checked now rather than when a scene is first built:

@@ -41,3 +41,14 @@ def test_camera_names_and_feature_keys_live_only_in_the_layout_module() -> None:
                 if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
                     found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.value!r}")
     assert not found, "\n".join(found)
+
+
+def test_the_referents_page_shows_the_contract_as_the_code_writes_it() -> None:
+    """The type contract is written once, in referents/contract.py (TypeModule); the docs render it."""
+    sys.path.insert(0, str(SCRIPT.parent))
+    try:
+        import contract_doc
+    finally:
+        sys.path.remove(str(SCRIPT.parent))
+    assert contract_doc.block() in contract_doc.PAGE.read_text()
+    assert len(contract_doc.rows()) == len(__import__("referents.contract").contract.CONTRACT)
