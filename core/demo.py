@@ -27,4 +27,4 @@ class Skills(Protocol):
         """Slide the object along the table, away from the robot."""
 
 
-Plan = Callable[[Skills, EpisodeSpec], None]
+DemoScript = Callable[[Skills, EpisodeSpec], None]  # a demonstration, written over the skills: `demo(skills, spec)`

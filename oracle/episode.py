@@ -1,4 +1,4 @@
-"""One episode in the simulator: demonstrate it with a plan, or replay recorded actions.
+"""One episode in the simulator: demonstrate it with a demo script, or replay recorded actions.
 
 Generation demonstrates without rendering (physics is cheap), keeping the physics state before
 every action; only a verified demo is then rendered, by restoring those states one by one, so a
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.demo import Plan
+from core.demo import DemoScript
 from core.spec import EpisodeSpec
 from core.success import Outcome, succeeded
 from oracle.ik import ArmIK, IKError
@@ -26,7 +26,7 @@ class Demo:
     spec: EpisodeSpec
     actions: np.ndarray  # (T, action size) float32, exactly what was executed
     states: np.ndarray  # (T, S) physics state (mjSTATE_INTEGRATION) before each action
-    outcome: Outcome | None  # None when the plan could not be executed (e.g. IK failed)
+    outcome: Outcome | None  # None when the script could not be executed (e.g. IK failed)
     success: bool
     failure: str = ""
 
@@ -36,8 +36,10 @@ def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outco
     return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])))
 
 
-def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan, state: np.ndarray | None = None, settle: int = 0) -> Demo:
-    """Run `plan` from the spec's poses, or from the physics `state` (an exam trial's start),
+def demonstrate(
+    scene: Scene, ik: ArmIK, spec: EpisodeSpec, script: DemoScript, state: np.ndarray | None = None, settle: int = 0
+) -> Demo:
+    """Run `script` from the spec's poses, or from the physics `state` (an exam trial's start),
     after `settle` steps that hold the arm still (a profile's settle steps)."""
     scene.reset(spec)
     if state is not None:
@@ -47,7 +49,7 @@ def demonstrate(scene: Scene, ik: ArmIK, spec: EpisodeSpec, plan: Plan, state: n
     start = scene.positions()
     skills = Skills(scene, ik, spec)
     try:
-        plan(skills, spec)
+        script(skills, spec)
     except IKError as exc:
         return Demo(
             spec,

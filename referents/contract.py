@@ -23,7 +23,7 @@ from types import ModuleType
 import numpy as np
 
 from core import worlds
-from core.demo import Plan, Skills
+from core.demo import DemoScript, Skills
 from core.libero import Problem
 from core.spec import EpisodeSpec, TaskSpec
 from referents import destination
@@ -76,7 +76,7 @@ class TypeModule:
     # target, template, counterfactuals), each through `balance.pick` (least used, seeded ties)
     design: Callable[[ReferentConfig, Balance], Design]
     # `demo(skills, spec)`: the oracle's plan, a few lines over the skills of core/demo.py
-    demo: Plan = pick_and_lift
+    demo: DemoScript = pick_and_lift
     # `alternatives(config, spec) -> [Alternative]`: what the instruction chooses among, for the confound
     # audit, each with the features that declare their family (referents/features.py)
     alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives

@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-from core.demo import Plan, Skills
+from core.demo import DemoScript, Skills
 from core.spec import EpisodeSpec
 from referents import destination
 from referents.balance import Balance
@@ -203,7 +203,7 @@ def own_name(name: str, world: str | None) -> tuple[str, str | None]:
     return (label, None) if label != name else (name, world)
 
 
-def demo_of(referent_type: str, spec_path: str | Path | None = None) -> Plan:
+def demo_of(referent_type: str, spec_path: str | Path | None = None) -> DemoScript:
     """The oracle's plan for a type's episodes, by the name they record (all a replay needs: no spec
     file). A type brought beside its spec file is found only given that file's path."""
     path = Path(spec_path) if spec_path is not None else (_alias(referent_type) or HERE / f"{referent_type}.yaml")

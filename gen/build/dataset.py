@@ -157,11 +157,11 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
 
 def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) -> tuple[list[dict], int, list[EpisodeSpec]]:
     """The LeRobot files, from the episode files, in order."""
-    from gen.lerobot.writer import Layout, LeRobotWriter
+    from gen.lerobot.writer import LeRobotWriter, Recording
 
     sim, features = planned.recording, planned.recording.layout
     writer = LeRobotWriter(
-        root, Layout(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
+        root, Recording(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
     )
     rows, written = [], []
     for produced in partial.episodes(cfg.n):

@@ -37,7 +37,7 @@ DEFAULT_FEATURES = {
 
 
 @dataclass(frozen=True)
-class Layout:
+class Recording:
     """The features of a dataset: camera keys (video), state and action names, rate, size."""
 
     fps: int
@@ -111,7 +111,7 @@ class _Rotating:
 @dataclass
 class LeRobotWriter:
     root: Path
-    layout: Layout
+    recording: Recording
     robot_type: str = "panda"
     chunks_size: int = 1000
     data_files_size_in_mb: int = 100
@@ -125,10 +125,10 @@ class LeRobotWriter:
         self._data_at = _Rotating(self.chunks_size)
         self._data: pq.ParquetWriter | None = None
         self._data_path: Path | None = None
-        self._video_at = {cam: _Rotating(self.chunks_size) for cam in self.layout.cameras}
+        self._video_at = {cam: _Rotating(self.chunks_size) for cam in self.recording.cameras}
         self._video: dict[str, VideoFile] = {}
         self._vectors: dict[str, list[np.ndarray]] = {}
-        self._histograms = {cam: np.zeros((3, 256), np.int64) for cam in self.layout.cameras}
+        self._histograms = {cam: np.zeros((3, 256), np.int64) for cam in self.recording.cameras}
 
     def add(self, episode: Episode) -> int:
         """Append an episode; returns its episode_index."""
@@ -138,7 +138,7 @@ class LeRobotWriter:
         columns = {
             "observation.state": episode.states.astype(np.float32),
             "action": episode.actions.astype(np.float32),
-            "timestamp": (np.arange(length) / self.layout.fps).astype(np.float32),
+            "timestamp": (np.arange(length) / self.recording.fps).astype(np.float32),
             "frame_index": np.arange(length, dtype=np.int64),
             "episode_index": np.full(length, index, np.int64),
             "index": np.arange(self.frames, self.frames + length, dtype=np.int64),
@@ -146,15 +146,15 @@ class LeRobotWriter:
         }
         row: dict = {"episode_index": index, "tasks": [episode.task], "length": length}
         row.update(self._write_data(columns))
-        for cam in self.layout.cameras:
+        for cam in self.recording.cameras:
             row.update(self._write_video(cam, episode.videos[cam]))
         row["dataset_from_index"] = self.frames
         row["dataset_to_index"] = self.frames + length
         row["meta/episodes/chunk_index"] = 0
         row["meta/episodes/file_index"] = 0
         episode_stats = {k: st.vector_stats(v) for k, v in columns.items()}
-        for cam in self.layout.cameras:
-            episode_stats[self.layout.video_key(cam)] = st.image_stats(episode.histograms[cam], length)
+        for cam in self.recording.cameras:
+            episode_stats[self.recording.video_key(cam)] = st.image_stats(episode.histograms[cam], length)
             self._histograms[cam] += episode.histograms[cam]
         for key, s in episode_stats.items():
             for name, value in s.items():
@@ -171,7 +171,7 @@ class LeRobotWriter:
                 k: (pa.FixedSizeListArray.from_arrays(pa.array(v.reshape(-1)), v.shape[1]) if v.ndim == 2 else v)
                 for k, v in columns.items()
             },
-            schema=self.layout.arrow_schema(),
+            schema=self.recording.arrow_schema(),
         )
         if self._data is not None and self._data_path is not None:
             if self._data_path.stat().st_size / 1e6 >= self.data_files_size_in_mb:
@@ -195,11 +195,11 @@ class LeRobotWriter:
             at.next()
         if current is None:
             path = self.root / VIDEO_PATH.format(
-                video_key=self.layout.video_key(camera), chunk_index=at.chunk, file_index=at.file
+                video_key=self.recording.video_key(camera), chunk_index=at.chunk, file_index=at.file
             )
-            current = self._video[camera] = VideoFile(path, self.layout.fps)
+            current = self._video[camera] = VideoFile(path, self.recording.fps)
         start, end = current.append(mp4)
-        key = self.layout.video_key(camera)
+        key = self.recording.video_key(camera)
         return {
             f"videos/{key}/chunk_index": at.chunk,
             f"videos/{key}/file_index": at.file,
@@ -219,8 +219,8 @@ class LeRobotWriter:
         tasks = pd.DataFrame({"task_index": list(self.tasks.values())}, index=pd.Index(list(self.tasks), name="task"))
         pq.write_table(pa.Table.from_pandas(tasks), meta / "tasks.parquet")
         dataset_stats = {k: st.vector_stats(np.concatenate(v)) for k, v in self._vectors.items()}
-        for cam in self.layout.cameras:
-            dataset_stats[self.layout.video_key(cam)] = st.image_stats(self._histograms[cam], self.frames)
+        for cam in self.recording.cameras:
+            dataset_stats[self.recording.video_key(cam)] = st.image_stats(self._histograms[cam], self.frames)
         (meta / "stats.json").write_text(json.dumps(st.to_json(dataset_stats), indent=2))
         info = {
             "codebase_version": CODEBASE_VERSION,
@@ -231,11 +231,11 @@ class LeRobotWriter:
             "chunks_size": self.chunks_size,
             "data_files_size_in_mb": self.data_files_size_in_mb,
             "video_files_size_in_mb": self.video_files_size_in_mb,
-            "fps": self.layout.fps,
+            "fps": self.recording.fps,
             "splits": {"train": f"0:{len(self.episodes)}"},
             "data_path": DATA_PATH,
             "video_path": VIDEO_PATH,
-            "features": self.layout.features(),
+            "features": self.recording.features(),
         }
         (meta / "info.json").write_text(json.dumps(info, indent=4))
         return info

@@ -10,15 +10,15 @@ from ledataset.datasets.lerobot_dataset import LeRobotDatasetMetadata
 from test_writer import FPS, SIZE, synthetic_episode
 
 from gen.lerobot.reader import LeRobotReader, frame_count
-from gen.lerobot.writer import Layout, LeRobotWriter
+from gen.lerobot.writer import LeRobotWriter, Recording
 
 LENGTHS = [7, 12, 9, 5]
 
 
 def _written(root: Path) -> LeRobotReader:
     """Four episodes, one file each, two files a chunk: spans cross files and chunks."""
-    layout = Layout(FPS, SIZE, ("cam",), ("a", "b", "c"), ("u", "v"))
-    writer = LeRobotWriter(root, layout, data_files_size_in_mb=0, video_files_size_in_mb=0, chunks_size=2)
+    recording = Recording(FPS, SIZE, ("cam",), ("a", "b", "c"), ("u", "v"))
+    writer = LeRobotWriter(root, recording, data_files_size_in_mb=0, video_files_size_in_mb=0, chunks_size=2)
     for ep, length in enumerate(LENGTHS):
         writer.add(synthetic_episode(ep, length))
     writer.finalize()

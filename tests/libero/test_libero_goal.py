@@ -30,10 +30,10 @@ from helpers import (
     liberos_replay,
     make_dataset,
 )
+from oracle.clearance import CARRY_MARGIN
 from oracle.episode import demonstrate
 from oracle.ik import ArmIK
 from oracle.scene import scene_for
-from oracle.skills import CARRY_MARGIN
 from referents import registry
 
 SUITE = "libero_goal"

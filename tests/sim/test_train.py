@@ -23,7 +23,7 @@ from eval.policies import FeatureMismatch
 from eval.registry import make
 from gen.lerobot.stats import image_histogram
 from gen.lerobot.video import encode_episode
-from gen.lerobot.writer import Episode, Layout, LeRobotWriter
+from gen.lerobot.writer import Episode, LeRobotWriter, Recording
 from helpers import make_dataset
 from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
 from train.stages import TIMINGS, Ledger
@@ -101,7 +101,7 @@ def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
 
 
 def _synthetic(root: Path, tasks: list[str], cameras: tuple[str, ...] = ("agentview", "wrist"), size: int = 32) -> Path:
-    writer = LeRobotWriter(root, Layout(20, size, cameras, NATIVE.state_names, NATIVE.action_names))
+    writer = LeRobotWriter(root, Recording(20, size, cameras, NATIVE.state_names, NATIVE.action_names))
     for task in tasks:
         frames = np.random.default_rng(0).integers(0, 255, (5, size, size, 3), dtype=np.uint8)
         writer.add(

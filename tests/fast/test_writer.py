@@ -11,7 +11,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 from core import parquet
 from gen.lerobot.stats import image_histogram, image_stats
 from gen.lerobot.video import encode_episode
-from gen.lerobot.writer import Episode, Layout, LeRobotWriter
+from gen.lerobot.writer import Episode, LeRobotWriter, Recording
 
 FPS, SIZE = 20, 32
 
@@ -33,8 +33,8 @@ def synthetic_episode(ep: int, length: int) -> Episode:
 
 
 def test_rotation_and_decoding(tmp_path: Path) -> None:
-    layout = Layout(FPS, SIZE, ("cam",), ("a", "b", "c"), ("u", "v"))
-    writer = LeRobotWriter(tmp_path, layout, data_files_size_in_mb=0, video_files_size_in_mb=0, chunks_size=2)
+    recording = Recording(FPS, SIZE, ("cam",), ("a", "b", "c"), ("u", "v"))
+    writer = LeRobotWriter(tmp_path, recording, data_files_size_in_mb=0, video_files_size_in_mb=0, chunks_size=2)
     lengths = [7, 12, 9]
     for ep, length in enumerate(lengths):
         writer.add(synthetic_episode(ep, length))
