@@ -65,8 +65,8 @@ class Clearance(Motion):
         gaps = {}
         for yaw in (self.yaw + RELEASE_TURNS).tolist():
             try:
-                over, _ = self._plan(above, yaw)
-                gaps[yaw] = self._gap(self._plan(down, yaw, start=over)[1], destination_id)
+                over, _ = self._path_to(above, yaw)
+                gaps[yaw] = self._gap(self._path_to(down, yaw, start=over)[1], destination_id)
             except IKError:  # out of the wrist's reach turned so
                 continue
             if gaps[yaw] >= CARRY_MARGIN:

@@ -71,7 +71,7 @@ class Motion:
                 return
             self._execute(q)
 
-    def _plan(self, pos: np.ndarray, yaw: float, start: np.ndarray | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
+    def _path_to(self, pos: np.ndarray, yaw: float, start: np.ndarray | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
         """The arm's goal putting the grip site at `pos`, and its joint path there from `start`
         (default: where the arm is)."""
         start = self.q if start is None else start
@@ -86,7 +86,7 @@ class Motion:
     def move_to(self, pos: np.ndarray, yaw: float | None = None) -> None:
         """Grip site to `pos`, pointing down, at `yaw` (default: keep the current yaw)."""
         yaw = self.yaw if yaw is None else yaw
-        self._follow(*self._plan(pos, yaw), yaw)
+        self._follow(*self._path_to(pos, yaw), yaw)
 
     def move_linear(self, pos: np.ndarray, speed: float = 0.12) -> None:
         """Grip site along a straight line to `pos` (minimum-jerk timing), e.g. to push."""

@@ -61,12 +61,12 @@ class Skills(Clearance):
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
         above, down = [over[0], over[1], carry_z], [over[0], over[1], release_z]
         yaw = self.yaw if rim else self._release_yaw(above, down, destination_id)  # a turned bowl would hang elsewhere
-        across = self._plan(above, yaw)
+        across = self._path_to(above, yaw)
         # Up first where the way across, still rising, would pass near a standing object, or a
         # hanging bowl could swing into furniture.
         if rim or self._gap(across[1], destination_id) < CARRY_MARGIN:
             self.move_to([*self.scene.ee_pos()[:2], carry_z])
-            across = self._plan(above, yaw)
+            across = self._path_to(above, yaw)
         self._follow(*across, yaw)
         if rim:  # straight down from where the hand is
             self.move_linear(down)
