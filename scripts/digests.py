@@ -9,7 +9,8 @@ of another commit digests that commit's. Run it before and after a change that m
 product (a refactor), then compare: `python scripts/digests.py --compare before.json after.json`
 lists every file that differs. Each
 command runs in a fresh folder with a relative `out`, so the records that name it agree; a run's
-wall time and the spec file's absolute path (meta/generation.json) are left out of its digest.
+wall time and the spec file's absolute path (meta/generation.json, exam.json) are left out of its
+digest.
 """
 
 from __future__ import annotations
@@ -47,6 +48,10 @@ def commands() -> dict[str, list[str]]:
 
 def _digest(path: Path) -> str:
     data = path.read_bytes()
+    if path.name == "exam.json":  # where the spec file lies is the checkout's, not the exam's
+        record = json.loads(data)
+        (record.get("referent_spec") or {}).pop("path", None)
+        data = json.dumps(record, sort_keys=True).encode()
     if path.name == "generation.json":  # what differs between identical runs, or machines
         record = json.loads(data)
         record.pop("seconds", None)
