@@ -133,7 +133,11 @@ def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
 START_TOLERANCE = 0.002  # m: how far a logged step-0 object may sit from where its trial starts
 
 
-def _parse(logs: pd.DataFrame, exam: Exam) -> dict[int, tuple[np.ndarray, dict[str, np.ndarray], str | None, np.ndarray | None]]:
+Logged = tuple[np.ndarray, dict[str, np.ndarray], str | None, np.ndarray | None]  # ee, objects, error, located
+
+
+def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
+    """Each row's log, checked against the exam (a LogError says how it does not fit)."""
     rows = exam.trials["row"]
     if not pd.api.types.is_integer_dtype(logs["row"]):
         kind = type(logs["row"].iloc[0]).__name__ if len(logs) else logs["row"].dtype
@@ -217,7 +221,7 @@ def _positions(log: pd.Series) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 
 
 def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
-    parsed = _parse(logs, exam)
+    parsed = parsed_logs(logs, exam)
     faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
     distances: list[tuple[float, float]] = []
@@ -392,7 +396,7 @@ def exam_label(exam: Exam) -> str:
 def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
     """Each swap rollout's row -> whether it landed on the named object (5 cm), as `score` counts
     obeyed name: what lets two policies' swaps be compared row by row."""
-    parsed, obeyed = _parse(logs, exam), {}
+    parsed, obeyed = parsed_logs(logs, exam), {}
     for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
         ee, objects, error, _ = parsed[int(row["row"])]
         obeyed[int(row["row"])] = not error and landed(judge(exam, row, ee, objects)) == (row["target"], row["program"])
