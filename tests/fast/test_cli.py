@@ -143,6 +143,7 @@ ENTRY_POINTS = [
     ("eval.suites", False),
     ("eval.score", False),
     ("eval.serve", False),
+    ("eval.agreement", False),
     ("train", False),
     ("train.experiment", False),
     ("train.axes", False),

@@ -93,6 +93,12 @@ def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, 
     """LIBERO's own task files and initial states: the hand and the objects follow the same paths in
     both simulators (our OSC acts as robosuite 1.4's, settle steps included), within millimetres."""
     _agree(canonical, tmp_path)
+    from eval.agreement import compare
+    from eval.score import read_logs
+
+    paired = compare(read(canonical), *(read_logs(tmp_path / s / "rollouts.parquet")[0] for s in ("ours", "libero")), "scripted")
+    assert paired["paired"]["swap"]["rate"] == paired["paired"]["task"]["rate"] == 1.0  # the same motion, the same outcome
+    assert paired["libero_check_agrees_with_ours"]["rate"] == 1.0
     ours, libero = (
         __import__("pandas").read_parquet(tmp_path / name / "rollouts.parquet").set_index("row") for name in ("ours", "libero")
     )
