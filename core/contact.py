@@ -45,3 +45,11 @@ def release_point(destination: Kind, pos: np.ndarray, carried: Kind) -> np.ndarr
     """Where the grip site lets go of `carried` over a destination at `pos`."""
     over = top(destination, pos)
     return np.stack([over[..., 0], over[..., 1], over[..., 2] + grip_height(carried) + PLACE_CLEARANCE], axis=-1)
+
+
+def distance(kind: Kind, pos: np.ndarray, ee: np.ndarray, carried: Kind | None = None) -> np.ndarray:
+    """(T,) distances of the grip site `ee` from where it meets an object of `kind` at `pos`: where it
+    is held (`grasp_distance`), or, when the hand brings `carried` there, the release point over it."""
+    if carried is None:
+        return grasp_distance(kind, pos, ee)
+    return np.linalg.norm(np.asarray(ee, dtype=float) - release_point(kind, pos, carried), axis=-1)

@@ -15,6 +15,7 @@ from answers.parquet and it cannot cheat without knowing.
 | `swap` | one word changed, once per alternative (the decoy rotates over every non-target) | the decoy | on |
 | `occ` | the original | the original | blanked (all zeros) |
 | `nonsense` | `xxx` | the original | on |
+| `switch` | the original, then from a recorded step one word changed (after the approach committed) | the newly named one | on |
 
 Columns of trials.parquet (the policy's side):
   row (int, unique), trial (int: rollouts of a trial share its scene), instruction (str),
@@ -22,7 +23,9 @@ Columns of trials.parquet (the policy's side):
   withheld — objects with id, kind, name, slot, pos, yaw, attributes; the inventory; the sim
   settings and profile; target, instruction, counterfactuals and task left empty; see
   core/spec.py), initial_state (list[float]: MuJoCo mjSTATE_INTEGRATION of the compiled scene),
-  max_steps (int: rollout horizon at the exam's fps).
+  max_steps (int: rollout horizon at the exam's fps), and in exams with switch rows switch (JSON:
+  {"step": s, "instruction": ...} on a switch row, the instruction the policy is shown from step s
+  on, "{}" on every other row; exams written before it have no such column and no switch rows).
 Columns of answers.parquet (the scorer's side), one row per rollout too:
   row, face (str), variant (int: 0 for task/occ/nonsense, 1.. for swaps), target (str: the
   object asked for), program (str: pick | push | place), original_target (str),
@@ -65,7 +68,12 @@ FACES = {
     "swap": "one word changed to name another alternative; obeyed = the rollout lands on the newly named one",
     "occ": "original instruction, cameras blanked; success must collapse for a policy that reads its cameras",
     "nonsense": f"instruction replaced by {NONSENSE!r}; a grounded policy should fail",
+    "switch": "the original instruction, replaced at a recorded step (the oracle's hand within SWITCH_DISTANCE of the "
+    "original target: the approach has committed) by one naming another alternative; obeyed = lands on the newly "
+    "named one, blind = goes on to the original",
 }
+SWITCH = "switch"  # a public column of exams with switch rows: {"step", "instruction"} on those rows, "{}" elsewhere
+SWITCH_DISTANCE = 0.10  # m from the original target's contact point at which the switch comes
 REACH_THRESHOLDS = (0.02, 0.05)
 LANDING = 0.05  # closest approach (m) at which a rollout counts as landing on an alternative
 PUBLIC_COLUMNS = ("row", "trial", "instruction", "occluded", "scene", "initial_state", "max_steps")
@@ -122,8 +130,12 @@ def trial_rows(
     max_steps: int,
     initial_ee: list[float],
     settled_start: dict[str, Any] | None = None,
+    switch_step: int | None = None,
+    switches: int = 0,
 ) -> list[dict]:
-    """The rollouts of one trial: task, a swap per alternative, occ, nonsense.
+    """The rollouts of one trial: task, a swap per alternative, occ, nonsense, and `switches` switch
+    rows (the instruction changed at `switch_step`; none without one), each naming the next
+    alternative in turn from the trial's number, so every alternative is switched to as often.
 
     `values_by_id` says what the instruction calls each alternative (an object id, or a
     program for verb-like types).
@@ -146,25 +158,32 @@ def trial_rows(
         "alternatives": json.dumps(alternatives),
     }
 
-    def row(face: str, variant: int, instruction: str, target: str, program: str, occluded: bool = False) -> dict:
+    def row(face: str, variant: int, instruction: str, target: str, program: str, occluded: bool = False, **more: Any) -> dict:
         value = values.get((target, program), target)
         return {**common, "face": face, "variant": variant, "instruction": instruction, "target": target,
-                "program": program, "occluded": occluded, "slot": spec.object(target).slot, "value": value}  # fmt: skip
+                "program": program, "occluded": occluded, "slot": spec.object(target).slot, "value": value, **more}  # fmt: skip
 
     rows = [row("task", 0, spec.instruction, spec.target, spec.task.program)]
     for i, cf in enumerate(spec.counterfactuals, start=1):
         rows.append(row("swap", i, cf.instruction, *spec.choice(cf)))
     rows.append(row("occ", 0, spec.instruction, spec.target, spec.task.program, occluded=True))
     rows.append(row("nonsense", 0, NONSENSE, spec.target, spec.task.program))
+    if switch_step is not None and spec.counterfactuals:
+        for k in range(switches):
+            cf = spec.counterfactuals[(trial + k) % len(spec.counterfactuals)]
+            switch = json.dumps({"step": switch_step, "instruction": cf.instruction})
+            rows.append(row("switch", k + 1, spec.instruction, *spec.choice(cf), **{SWITCH: switch}))
     return rows
 
 
 def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
     for i, r in enumerate(rows):
         r["row"] = i
+        r.setdefault(SWITCH, "{}")
     settles = any(r[SETTLED] != "{}" for r in rows)  # only a profile with settle steps records where they leave it
     answers = (*ANSWER_COLUMNS, SETTLED) if settles else ANSWER_COLUMNS
-    for name, columns in ((TRIALS_FILE, PUBLIC_COLUMNS), (ANSWERS_FILE, answers)):
+    public = (*PUBLIC_COLUMNS, SWITCH) if any(r[SWITCH] != "{}" for r in rows) else PUBLIC_COLUMNS
+    for name, columns in ((TRIALS_FILE, public), (ANSWERS_FILE, answers)):
         pq.write_table(pa.Table.from_pylist([{c: r[c] for c in columns} for r in rows]), root / name)
     header = {
         "format": EXAM_FORMAT,
@@ -242,7 +261,16 @@ def read(root: Path | str) -> Exam:
         raise ExamError(f"{root}: {TRIALS_FILE} and {ANSWERS_FILE} do not hold the same rows once each")
     if SETTLED not in answers.columns:
         answers[SETTLED] = "{}"
+    if SWITCH not in trials.columns:  # written before switch rows existed
+        trials[SWITCH] = "{}"
     trials = trials.merge(answers, on="row")
+    late = [
+        (int(r), json.loads(s)["step"], int(m)) for r, s, m in zip(trials["row"], trials[SWITCH], trials["max_steps"])
+        if s != "{}" and not 0 < json.loads(s)["step"] < m
+    ]  # fmt: skip
+    if late:
+        row, step, horizon = late[0]
+        raise ExamError(f"{root}: row {row} switches its instruction at step {step}, outside its 1..{horizon - 1} steps")
     try:
         EpisodeSpec.from_json(trials["spec"].iloc[0])
     except SpecError as exc:

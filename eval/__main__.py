@@ -111,7 +111,7 @@ def evaluate(options: EvalOptions) -> None:
     resumed = f", {kept} kept from the interrupted take" if kept else ""
     where = " in LIBERO's own simulator" if options.sim == "libero" else ""
     print(f"{report['policy']} on {report['exam']}{where}: {ran} rollouts in {seconds:.0f} s{rate}{resumed}")
-    for face in ("task", "obeyed_name", "true_target", "occ", "nonsense"):
+    for face in ("task", "obeyed_name", "true_target", "occ", "nonsense", "switch_obeyed", "switch_blind"):
         if face in faces:
             f = faces[face]
             print(

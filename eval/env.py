@@ -11,7 +11,9 @@ observation has the dataset's keys; the action is the dataset's, in the exam's p
 7 joint targets + gripper; libero: a 7-d end-effector delta through OSC_POSE, and reset first
 runs the settle steps lerobot's LIBERO environment runs).
 `reward` is 1.0 while the asked-for program is achieved; the episode truncates at the row's
-horizon. `info` carries the instruction, the row, its horizon and the end-effector and object
+horizon. On a switch row `info["instruction"]` (and what the policy should be given) changes at
+the row's switch step. `info` carries the instruction, the row, its horizon and the end-effector
+and object
 positions the offline scorer takes (`python -m eval.score`) — never the answer: what the row
 asks for stays in the exam's answers.parquet, which only the scorer (and this reward) reads.
 The id is registered by the `deconfound_exam` module (a name no lab's folder shadows).
@@ -19,6 +21,7 @@ The id is registered by the `deconfound_exam` module (a name no lab's folder sha
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import gymnasium as gym
@@ -26,7 +29,7 @@ import numpy as np
 from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from core.exam import Exam, read
+from core.exam import SWITCH, Exam, read
 from core.layout import STATE_KEY
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
@@ -75,14 +78,20 @@ class ExamEnv(gym.Env):
         self._t = 0
         self._start: dict = {}
 
+    @property
+    def instruction(self) -> str:
+        """The instruction shown now: the row's, or on a switch row from its step on the new one."""
+        switch = json.loads(self.row.get(SWITCH) or "{}")
+        return switch["instruction"] if switch and self._t >= switch["step"] else str(self.row["instruction"])
+
     def _obs(self) -> dict:
-        obs = observe(self.scene, self.cameras, self.row["instruction"], bool(self.row["occluded"]))
+        obs = observe(self.scene, self.cameras, self.instruction, bool(self.row["occluded"]))
         obs.pop("task")
         return obs
 
     def _info(self) -> dict:
         return {
-            "instruction": self.row["instruction"],
+            "instruction": self.instruction,
             "row": int(self.row["row"]),
             "max_steps": int(self.row["max_steps"]),
             "ee": self.scene.ee_pos(),

@@ -29,14 +29,19 @@ eval/registry.py makes them (and every other policy) by name.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from core.demo import DemoScript
 from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
 from referents import registry
+
+if TYPE_CHECKING:
+    from oracle.episode import Demo
 
 
 @dataclass(frozen=True)
@@ -50,6 +55,7 @@ class Context:
     program: str
     seed: int
     initial_state: np.ndarray | None = None  # the physics state the rollout starts from (None: the spec's poses)
+    switch: tuple[int, str] | None = None  # a switch row's (step, instruction from then on): the policy is shown it then
 
 
 class Policy(Protocol):
@@ -91,9 +97,17 @@ class Scripted:
         self._t = 0
         self._planner: dict = {}
 
-    def _plan(self, spec: EpisodeSpec, demo, context: Context) -> list[np.ndarray]:  # noqa: ANN001
+    def _actions_for(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> list[np.ndarray]:
+        return list(self._demo(spec, demo, context).actions)
+
+    def _demo(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> Demo:
         """The demonstration from where the rollout will start: the trial's initial state after
-        the profile's settle steps."""
+        the profile's settle steps (its `states`: the physics state before each action)."""
+        return self._demonstrate(spec, demo, context.initial_state, spec.sim.layout.settle_steps)
+
+    def _demonstrate(
+        self, spec: EpisodeSpec, demo: DemoScript, state: np.ndarray | None, settle: int, prefix: Sequence[np.ndarray] = ()
+    ) -> Demo:
         from oracle.episode import demonstrate
         from oracle.ik import ArmIK
         from oracle.scene import Scene
@@ -103,8 +117,7 @@ class Scripted:
         if key not in self._planner:
             self._planner[key] = (Scene(*key), ArmIK(np.asarray(spec.sim.robot_home), spec.sim.world))
         scene, ik = self._planner[key]
-        settle = spec.sim.layout.settle_steps
-        return list(demonstrate(scene, ik, spec, demo, context.initial_state, settle).actions)
+        return demonstrate(scene, ik, spec, demo, state, settle, prefix)
 
     def act(self, observation: dict) -> np.ndarray | None:
         if self._t >= len(self._actions):
@@ -118,9 +131,17 @@ class Oracle(Scripted):
         super().__init__("oracle")
 
     def reset(self, context: Context) -> None:
-        spec = context.spec
+        """The demonstration of what the row asks for; on a switch row, the original ask's until the
+        switch, then a new plan of the newly named one from where the arm is then."""
+        spec, script = context.spec, registry.demo_of(context.spec.referent)
         asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
-        self._actions, self._t = self._plan(asked, registry.demo_of(spec.referent), context), 0
+        if context.switch is None:
+            self._actions, self._t = self._actions_for(asked, script, context), 0
+            return
+        step = context.switch[0]
+        before = list(self._demo(spec, script, context).actions[:step])
+        then = self._demonstrate(asked, script, context.initial_state, spec.sim.layout.settle_steps, before)
+        self._actions, self._t = [*before, *then.actions], 0
 
 
 class Position(Scripted):
@@ -133,8 +154,8 @@ class Position(Scripted):
     def reset(self, context: Context) -> None:
         referent = registry.load(context.spec.referent, world=context.spec.sim.world)
         chosen = self._chosen(referent, context)
-        plan = registry.pick_and_lift if chosen.task.program == "pick" else referent.demo
-        self._actions, self._t = self._plan(chosen, plan, context), 0
+        script = registry.pick_and_lift if chosen.task.program == "pick" else referent.demo
+        self._actions, self._t = self._actions_for(chosen, script, context), 0
 
 
 class NamedPlace(Position):

@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 
 from core.products import REPORTS
 
-FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense")
+FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense", "switch_obeyed", "switch_blind")
 
 
 LEVELS = ("5cm", "2cm", "achieved")

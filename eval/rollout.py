@@ -19,6 +19,7 @@ from typing import Protocol
 import numpy as np
 import pandas as pd
 
+from core.exam import SWITCH
 from core.layout import IMAGE_PREFIX, LAYOUTS, NATIVE, STATE_KEY, TASK_KEY, FeatureLayout
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
@@ -178,7 +179,9 @@ class Runner:
         spec = EpisodeSpec.from_json(row["spec"])
         log = Log(int(row["row"]))
         start = np.asarray(row["initial_state"])
-        context = Context(spec, str(row["instruction"]), str(row["target"]), str(row["program"]), int(row["row"]), start)
+        switch = json.loads(row.get(SWITCH) or "{}")
+        at = (int(switch["step"]), str(switch["instruction"])) if switch else None
+        context = Context(spec, str(row["instruction"]), str(row["target"]), str(row["program"]), int(row["row"]), start, at)
         try:
             self.policy.reset(context)
         except Exception as exc:  # a broken policy fails its rollout, not the run
@@ -196,9 +199,12 @@ class Runner:
             return log
         locate = getattr(self.policy, "locate", None)
         wants = getattr(self.policy, "wants_observation", None)
+        instruction = context.instruction
         for t in range(int(row["max_steps"])):
+            if at is not None and t == at[0]:  # a switch row: from here on the policy is shown the new instruction
+                instruction = at[1]
             images = render and (wants is None or wants() or (t == 0 and locate is not None))
-            observation = sim.observe(context.instruction, bool(row["occluded"]), images)
+            observation = sim.observe(instruction, bool(row["occluded"]), images)
             try:
                 if t == 0 and locate is not None:
                     log.located = [float(v) for v in locate(observation)]

@@ -18,12 +18,14 @@ report.json schema (version 2):
   faces.<face> = {k, n, rate, ci: [lo, hi], ci_trials: [lo, hi], chance, by_level} for task
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
       (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
-      (swap: achieved the new ask). `ci` is Wilson's (every rollout independent); `ci_trials`
-      resamples whole trials, whose rollouts share a scene (core/rates.py). `by_level` =
+      (swap: achieved the new ask), and on exams with switch rows switch_obeyed (the instruction
+      changed mid-course: landed on the newly named alternative) and switch_blind (went on to the
+      original). `ci` is Wilson's (every rollout independent); `ci_trials` resamples whole trials,
+      whose rollouts share a scene (core/rates.py). `by_level` =
       {"5cm", "2cm", "achieved": {k, n, rate, ci, ci_trials}}: the same face judged as landing
       within 5 cm, within 2 cm, or achieving the program (lifted / pushed / placed) on what the
-      face counts (the ask; for true_target the original). The headline is the 5 cm level for
-      obeyed_name and true_target and the achieved level for the others.
+      face counts (the ask; for true_target and switch_blind the original). The headline is the 5 cm
+      level for obeyed_name, true_target and the switch faces, and the achieved level for the others.
   baseline = the faces of the `position` reference policy (the measured shortcut) on the same
       exam, when known (python -m eval runs it once per exam and caches it); baseline_source says
       where it came from, or how to measure it where it is missing
@@ -41,7 +43,7 @@ report.json schema (version 2):
   per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value, with both
       intervals: {k, n, rate, ci, ci_trials})
   errors = [{row, error}] for rollouts that broke (they count as failures)
-  sim_success = {task, swap_success, occ, nonsense: {k, n, rate, ci, ci_trials}}: the simulator's own
+  sim_success = {task, swap_success, occ, nonsense, switch: {k, n, rate, ci, ci_trials}}: the simulator's own
       verdict on each row's ask (LIBERO's `In`/`On` predicates under sim=libero: its `check_success()`
       on a task row), beside ours in faces; only for logs that carry it
 """
@@ -84,10 +86,8 @@ def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: 
     the object's grasp point (a bowl's: its rim) or the release point over a destination, the
     places the oracle's skills go to (core/contact.py)."""
     kind = worlds.kind(spec.object(target).kind, spec.sim.world)
-    if program == "place":
-        carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world)
-        return np.linalg.norm(ee - contact.release_point(kind, objects[target], carried), axis=-1)
-    return contact.grasp_distance(kind, objects[target], ee)
+    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if program == "place" else None
+    return contact.distance(kind, objects[target], ee, carried)
 
 
 def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], steps: int | None = None) -> dict:
@@ -261,12 +261,15 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             if located is not None:
                 nearest = _nearest(EpisodeSpec.from_json(row["spec"]), objects, located)
                 grounding.append((float(nearest == row["target"]), trial, chance))
+        elif face == "switch":  # scored as a swap: the newly named one, or on to the original (blind)
+            ok = count("switch_obeyed", asked, "5cm")
+            count("switch_blind", original, "5cm")
         else:
             ok = count(face, asked, "achieved")
         verdict = verdicts.get(int(row["row"]))
         if verdict is not None:
             judged_by_sim["swap_success" if face == "swap" else face].append((float(verdict and not error), trial))
-        main = "obeyed_name" if face == "swap" else face
+        main = {"swap": "obeyed_name", "switch": "switch_obeyed"}.get(face, face)
         if face in ("task", "swap"):
             per_slot[str(row["slot"])][main].append((float(ok), trial))
             per_object[str(row["value"])][main].append((float(ok), trial))

@@ -53,6 +53,7 @@ class GenConfig:
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
     world: Optional[str] = None  # native, libero_goal, libero_object, libero_spatial: one carrying the type; default its own
     look: str = FAST  # fast | full: every mesh whole and reflections, as the world's own simulator draws (core/spec.py)
+    switches: Optional[int] = None  # split=exam: switch rows per trial (the instruction changed mid-course); default 1, 0 none
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -120,6 +121,9 @@ def validate(cfg: GenConfig) -> None:
         raise UserError("push_to_hub=true needs repo_id=<user or org>/<name>")
     if cfg.split not in ("train", "exam"):
         raise UserError(f"split must be train or exam, got {cfg.split!r}")
+    if cfg.switches is not None and (cfg.split != "exam" or cfg.switches < 0):
+        got = f"switches={cfg.switches} with split={cfg.split}"
+        raise UserError(f"switches= sizes an exam's switch rows (split=exam, 0 or more), got {got}")
     if cfg.split == "exam" and cfg.plan_only:
         raise UserError("plan_only=true and split=exam do not combine: an exam is already simulation-free to read")
     if cfg.workers is None:

@@ -8,11 +8,12 @@ MuJoCo is deterministic: replaying the recorded actions reproduces the same stat
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from core import contact
 from core.demo import DemoScript
 from core.spec import EpisodeSpec
 from core.success import Outcome, succeeded
@@ -37,17 +38,29 @@ def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outco
 
 
 def demonstrate(
-    scene: Scene, ik: ArmIK, spec: EpisodeSpec, script: DemoScript, state: np.ndarray | None = None, settle: int = 0
+    scene: Scene,
+    ik: ArmIK,
+    spec: EpisodeSpec,
+    script: DemoScript,
+    state: np.ndarray | None = None,
+    settle: int = 0,
+    prefix: Sequence[np.ndarray] = (),
 ) -> Demo:
     """Run `script` from the spec's poses, or from the physics `state` (an exam trial's start),
-    after `settle` steps that hold the arm still (a profile's settle steps)."""
+    after `settle` steps that hold the arm still (a profile's settle steps) and the actions of
+    `prefix` (what ran before a plan changed course: the demo holds the actions after them, and
+    its IK may start from the arm's home pose where the arm's own pose leads nowhere)."""
     scene.reset(spec)
     if state is not None:
         scene.set_physics_state(state)
     for _ in range(settle):
         scene.step(scene.layout.hold_action(spec.sim.robot_home))
     start = scene.positions()
+    for action in prefix:
+        scene.step(np.asarray(action))
     skills = Skills(scene, ik, spec)
+    if len(prefix):
+        skills.reseed = np.asarray(spec.sim.robot_home, float)
     try:
         script(skills, spec)
     except IKError as exc:
@@ -74,3 +87,17 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
             observe(t)
         scene.step(action)
     return measure(scene, start)
+
+
+def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
+    """The first action of `demo` at whose start the hand is within `within` of where it meets the
+    episode's target (its grasp point; the release point over a destination): where the approach
+    has committed. None if it never comes so near."""
+    spec = demo.spec
+    kind = scene.world.kind(spec.object(spec.target).kind)
+    carried = scene.world.kind(spec.object(spec.task.params["object"]).kind) if spec.task.program == "place" else None
+    for t, state in enumerate(demo.states):
+        scene.set_physics_state(state)
+        if float(contact.distance(kind, scene.object_pos(spec.target), scene.ee_pos(), carried)) < within:
+            return t
+    return None

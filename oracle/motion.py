@@ -14,7 +14,7 @@ import numpy as np
 
 from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
-from oracle.ik import ArmIK
+from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene, axis_angle
 from oracle.trajectory import Limits, joint_path
 
@@ -45,6 +45,9 @@ class Motion:
         self.actions: list[np.ndarray] = []
         self.states: list[np.ndarray] = []  # physics state before each action
         self.deltas = scene.layout.controller != NATIVE.controller
+        # joints to seed IK from where the arm's own pose leads it to none (a plan begun mid-course,
+        # its wrist turned for another object); None: a plan from the arm's start never needs it
+        self.reseed: np.ndarray | None = None
 
     def _execute(self, q: np.ndarray) -> None:
         # The action is rounded to float32 before execution: what is recorded is what ran.
@@ -75,7 +78,12 @@ class Motion:
         """The arm's goal putting the grip site at `pos`, and its joint path there from `start`
         (default: where the arm is)."""
         start = self.q if start is None else start
-        goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=start)
+        try:
+            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=start)
+        except IKError:
+            if self.reseed is None:
+                raise
+            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=self.reseed)
         return goal, joint_path(start, goal, self.dt, self.limits)
 
     def _follow(self, goal: np.ndarray, path: list[np.ndarray], yaw: float) -> None:

@@ -66,6 +66,7 @@ class CanonicalOptions:
     suite: Optional[str] = None  # a LIBERO-PRO suite of the world's (its world is inferred): libero_object_swap, ...
     tasks: Optional[int] = None  # only the first this many covered tasks (a quick look); default all
     look: str = FAST  # fast | full: how the exam's cameras draw (core/spec.py LOOKS)
+    switches: int = 1  # switch rows per trial (the instruction changed mid-course, core/exam.py); 0: none
 
 
 @dataclass(frozen=True)
@@ -254,6 +255,8 @@ def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
         raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
     if options.look not in LOOKS:
         raise UserError(f"look must be one of {', '.join(LOOKS)}, got {options.look!r}")
+    if options.switches < 0:
+        raise UserError(f"switches must be 0 or more, got {options.switches}")
     out = Path(options.out or f"datasets/{suite.name}-canonical")
     check_output(out, options.overwrite)
     return suite, out
@@ -302,6 +305,8 @@ def build(options: CanonicalOptions) -> None:
     suite, out = _options(options)
     from tqdm import tqdm
 
+    from gen.build.exam import switch_step
+    from oracle.ik import ArmIK
     from oracle.scene import scene_for
 
     started = time.perf_counter()
@@ -314,6 +319,7 @@ def build(options: CanonicalOptions) -> None:
         for task in suite.tasks
     }
     scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
+    ik = ArmIK(np.asarray(world.robot_home), world.name)
     rows, specs = [], []
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
     for task in suite.tasks:
@@ -322,7 +328,9 @@ def build(options: CanonicalOptions) -> None:
             values = {a.id: a.value for a in suite.referent.alternatives(spec)}
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
-            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, scene.settled(spec))
+            settled = scene.settled(spec)
+            switch = switch_step(scene, ik, suite.referent, spec, state) if options.switches else None
+            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, settled, switch, options.switches)
             specs.append(spec)
             bar.update()
     bar.close()
@@ -385,7 +393,8 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSetti
         "seed": options.seed,
         "split": "exam",
         "command": f"python -m gen.canonical {named} states={options.states} seed={options.seed} image_size={options.image_size}"
-        + (f" tasks={options.tasks}" if options.tasks else ""),
+        + (f" tasks={options.tasks}" if options.tasks else "")
+        + (f" switches={options.switches}" if options.switches != 1 else ""),
         "profile": profile,
         "world": world.name,
         "canonical": {

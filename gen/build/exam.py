@@ -27,8 +27,11 @@ from jobs.partial import staging
 from referents.registry import Referent
 
 if TYPE_CHECKING:
+    from core.spec import EpisodeSpec
     from gen.build.produce import Producer
     from oracle.episode import Demo
+    from oracle.ik import ArmIK
+    from oracle.scene import Scene
 
 HORIZON_FACTOR, HORIZON_SLACK = 1.5, 20  # rollout steps allowed: 1.5x the longest oracle demo of the trial, plus 20
 
@@ -66,6 +69,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
 
     referent = planned.only.referent
     producer = Producer(referent, planned.only.sim)
+    switches = 1 if cfg.switches is None else cfg.switches
     rows: list[dict] = []
     for i, design in enumerate(tqdm(planned.designs, desc=f"{referent.name} exam", unit="trial", disable=not progress)):
         try:
@@ -77,8 +81,20 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
         state = producer.scene.physics_state().astype(np.float64).tolist()
         ee = [float(v) for v in producer.scene.ee_pos()]
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
-        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, producer.scene.settled(demo.spec))
+        settled = producer.scene.settled(demo.spec)
+        switch = switch_step(producer.scene, producer.ik, referent, demo.spec, state) if switches else None
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, settled, switch, switches)
     return rows
+
+
+def switch_step(scene: Scene, ik: ArmIK, referent: Referent, spec: EpisodeSpec, state: list[float]) -> int | None:
+    """Where a switch row changes its instruction: the step at which the oracle, doing the trial's
+    own task from where its rollouts start (the initial state, the profile's settle steps), brings
+    the hand within SWITCH_DISTANCE of the original target (oracle/episode.py approach_step)."""
+    from oracle.episode import approach_step, demonstrate
+
+    demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), spec.sim.layout.settle_steps)
+    return approach_step(scene, demo, exam.SWITCH_DISTANCE)
 
 
 def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:

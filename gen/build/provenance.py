@@ -28,7 +28,7 @@ DETERMINING = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attem
 # Options a command line spells as a list.
 LIST_OPTIONS = ("holdout", "distractor_only", "targets")
 # What the exam of a dataset does not inherit from it: its size, random stream and confounds.
-NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only")
+NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only", "switches")
 
 
 def run_record(cfg: GenConfig) -> dict:
@@ -40,6 +40,8 @@ def run_record(cfg: GenConfig) -> dict:
         record["world"] = cfg.world
     if cfg.look != FAST:
         record["look"] = cfg.look
+    if cfg.switches is not None:
+        record["switches"] = cfg.switches
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
@@ -92,7 +94,7 @@ class Provenance:
         if cfg.world is not None and not own:
             parts.append(("world", f"world={cfg.world}"))  # a type's own world goes unsaid
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
-        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look"):
+        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look", "switches"):
             value = getattr(cfg, name)
             if value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
                 parts.append((name, f"{name}={value}"))
