@@ -35,8 +35,11 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
   calls it), initial_ee (list[float]: the end effector's position in the initial state),
   settled_start (JSON: {"ee": [x, y, z], "objects": {id: [x, y, z]}} after the profile's settle
   steps, where `reset()` of the gymnasium env leaves them; only where the profile has settle
-  steps). A log's step 0 must show one of the two: the initial state (then the settle steps are
-  logged as steps) or the settled start.
+  steps), and in exams written since the prediction face frame_objects (bytes: zlib-compressed
+  uint8 H x W map of the agentview camera's first frame, what a rollout's first observation shows,
+  from MuJoCo's segmentation: pixel k > 0 shows the spec's k-th object, 0 anything else; the same
+  for every row of a trial). A log's step 0 must show one of the two: the initial state (then the
+  settle steps are logged as steps) or the settled start.
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
@@ -46,11 +49,13 @@ simulator), the referent spec and the plan's confound audit.
 from __future__ import annotations
 
 import json
+import zlib
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -82,6 +87,8 @@ ANSWER_COLUMNS = (
     "alternatives", "slot", "value", "initial_ee",
 )  # fmt: skip
 SETTLED = "settled_start"  # an answers column of exams whose profile settles (added within version 2; older ones lack it)
+FRAME_OBJECTS = "frame_objects"  # an answers column: the first frame's objects (added within version 2; older ones lack it)
+PREDICTION_RADIUS = 0.04  # of the frame's width: how near a predicted point must come to an object's pixels to be on it
 
 
 class ExamError(ValueError):
@@ -132,13 +139,14 @@ def trial_rows(
     settled_start: dict[str, Any] | None = None,
     switch_step: int | None = None,
     switches: int = 0,
+    frame_objects: bytes | None = None,
 ) -> list[dict]:
     """The rollouts of one trial: task, a swap per alternative, occ, nonsense, and `switches` switch
     rows (the instruction changed at `switch_step`; none without one), each naming the next
     alternative in turn from the trial's number, so every alternative is switched to as often.
 
     `values_by_id` says what the instruction calls each alternative (an object id, or a
-    program for verb-like types).
+    program for verb-like types); `frame_objects` is the first frame's map (`encode_objects`).
     """
     objects = {o.id for o in spec.objects}
     values = {((i, spec.task.program) if i in objects else (spec.target, i)): v for i, v in values_by_id.items()}
@@ -156,6 +164,7 @@ def trial_rows(
         SETTLED: json.dumps(settled_start or {}),
         "max_steps": max_steps,
         "alternatives": json.dumps(alternatives),
+        FRAME_OBJECTS: frame_objects,
     }
 
     def row(face: str, variant: int, instruction: str, target: str, program: str, occluded: bool = False, **more: Any) -> dict:
@@ -176,12 +185,23 @@ def trial_rows(
     return rows
 
 
+def encode_objects(indices: np.ndarray) -> bytes:
+    """A first frame's object map (H, W) uint8 as the exam stores it: zlib over its bytes, row by row."""
+    return zlib.compress(np.ascontiguousarray(indices, np.uint8).tobytes(), 9)
+
+
+def decode_objects(blob: bytes, size: int) -> np.ndarray:
+    """The (size, size) uint8 map `encode_objects` stored."""
+    return np.frombuffer(zlib.decompress(blob), np.uint8).reshape(size, size)
+
+
 def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
     for i, r in enumerate(rows):
         r["row"] = i
         r.setdefault(SWITCH, "{}")
     settles = any(r[SETTLED] != "{}" for r in rows)  # only a profile with settle steps records where they leave it
     answers = (*ANSWER_COLUMNS, SETTLED) if settles else ANSWER_COLUMNS
+    answers += (FRAME_OBJECTS,) if any(r.get(FRAME_OBJECTS) for r in rows) else ()
     public = (*PUBLIC_COLUMNS, SWITCH) if any(r[SWITCH] != "{}" for r in rows) else PUBLIC_COLUMNS
     for name, columns in ((TRIALS_FILE, public), (ANSWERS_FILE, answers)):
         pq.write_table(pa.Table.from_pylist([{c: r[c] for c in columns} for r in rows]), root / name)
@@ -261,6 +281,8 @@ def read(root: Path | str) -> Exam:
         raise ExamError(f"{root}: {TRIALS_FILE} and {ANSWERS_FILE} do not hold the same rows once each")
     if SETTLED not in answers.columns:
         answers[SETTLED] = "{}"
+    if FRAME_OBJECTS not in answers.columns:  # written before the prediction face: predictions go unscored
+        answers[FRAME_OBJECTS] = None
     if SWITCH not in trials.columns:  # written before switch rows existed
         trials[SWITCH] = "{}"
     trials = trials.merge(answers, on="row")

@@ -35,7 +35,7 @@ def outcomes(exam: Exam, logs: pd.DataFrame) -> tuple[dict[int, object], dict[in
     parsed, did, achieved = parsed_logs(logs, exam), {}, {}
     for _, row in exam.trials.iterrows():
         r = int(row["row"])
-        ee, objects, error, _ = parsed[r]
+        ee, objects, error, *_ = parsed[r]
         judged = judge(exam, row, ee, objects)
         achieved[r] = not error and judged[(row["target"], row["program"])]["achieved"]
         did[r] = (None if error else landed(judged)) if row["face"] == "swap" else achieved[r]

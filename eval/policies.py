@@ -7,6 +7,11 @@ The observation holds `observation.images.<camera>` (H, W, 3 uint8; all zeros on
 absent when the policy reads no images), `observation.state` (16 float32) and `task` (the
 instruction).
 
+A policy that predicts where its motion will go may have `predicted()`: with the chunk its last
+act() planned, a point [column, row] in the agentview frame's pixels or a heat map (H, W) over
+that frame (None: no prediction); the runner logs the one made with the first chunk, which the
+prediction face scores. The scripted reference policies predict the object their plan acts on.
+
 A policy that knows which features it was trained on may have `check(features)`: the battery
 calls it once, before any rollout, with the exam's `{key: shape}` (`Exam.features`), and it
 raises FeatureMismatch naming the first key that does not fit, so a whole exam is not spent on
@@ -35,6 +40,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from core import worlds
 from core.demo import DemoScript
 from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
@@ -96,9 +102,19 @@ class Scripted:
         self._actions: list[np.ndarray] = []
         self._t = 0
         self._planner: dict = {}
+        self._heading: tuple[EpisodeSpec, str] | None = None  # the plan's spec and the object it acts on first
 
     def _actions_for(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> list[np.ndarray]:
+        self._heading = (spec, spec.target)
         return list(self._demo(spec, demo, context).actions)
+
+    def predicted(self) -> np.ndarray | None:
+        """The object the plan acts on, where the agentview frame shows it at the start."""
+        if self._heading is None:
+            return None
+        spec, target = self._heading
+        where = np.asarray([spec.object(target).pos])
+        return worlds.world(spec.sim.world).agentview.project(where, spec.sim.image_size, spec.sim.layout.mirrored)[0]
 
     def _demo(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> Demo:
         """The demonstration from where the rollout will start: the trial's initial state after
@@ -139,6 +155,7 @@ class Oracle(Scripted):
             self._actions, self._t = self._actions_for(asked, script, context), 0
             return
         step = context.switch[0]
+        self._heading = (spec, spec.target)  # the original ask, until the switch
         before = list(self._demo(spec, script, context).actions[:step])
         then = self._demonstrate(asked, script, context.initial_state, spec.sim.layout.settle_steps, before)
         self._actions, self._t = [*before, *then.actions], 0

@@ -3,7 +3,10 @@ take the exam.
 
 `keys=dataset` (default): each query sends the observation dict (the dataset's keys, images as
 H x W x 3 uint8) plus `prompt` (the instruction) and expects `{"actions": array (H, A)}`; the
-first `replan` actions of each chunk are executed before the next query.
+first `replan` actions of each chunk are executed before the next query. A server whose policy
+predicts where its motion will go may add `"prediction"` to the response: a point [column, row] in
+the agentview frame's pixels, or a heat map (H, W) over that frame; the one sent with the first
+chunk is scored by the prediction face (docs/EXAM_FORMAT.md).
 
 `keys=libero` (a `profile=libero` exam): each query is what openpi's own LIBERO example client
 (examples/libero/main.py) sends — `observation/image` and `observation/wrist_image` (the
@@ -64,10 +67,16 @@ class RemotePolicy:
         except Exception as exc:  # the websocket handshake can fail in many ways
             raise PolicyError(f"policy server {host}:{port} did not complete the openpi handshake: {exc}") from None
         self._queue: list[np.ndarray] = []
+        self._predicted: object = None
 
     def reset(self, context: Context) -> None:
         self._queue = []
+        self._predicted = None
         self._client.reset()
+
+    def predicted(self) -> object:
+        """The `prediction` the server sent with its last chunk, if any."""
+        return self._predicted
 
     def wants_observation(self) -> bool:
         """Whether the next act() reads its observation: not while it executes a chunk (the runner
@@ -81,7 +90,9 @@ class RemotePolicy:
             else:
                 obs = {k: v for k, v in observation.items() if k != TASK_KEY}
                 obs["prompt"] = observation[TASK_KEY]
-            chunk = np.asarray(self._client.infer(obs)["actions"], dtype=np.float32)
+            response = self._client.infer(obs)
+            self._predicted = response.get("prediction")
+            chunk = np.asarray(response["actions"], dtype=np.float32)
             chunk = chunk.reshape(-1, chunk.shape[-1]) if chunk.ndim > 1 else chunk[None]
             self._queue = list(chunk[: self.replan])
         return self._queue.pop(0)

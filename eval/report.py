@@ -21,6 +21,12 @@ FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nons
 
 
 LEVELS = ("5cm", "2cm", "achieved")
+PREDICTION_ROWS = {  # report.json prediction keys, in the table's order: where the first predicted point falls
+    "task": "on the named object (task)",
+    "name": "on the newly named object (swap)",
+    "original": "on the original (swap)",
+    "occ": "on the named object, cameras blank (occ)",
+}
 
 
 SIMULATORS = {
@@ -74,6 +80,14 @@ def markdown(report: dict) -> str:
         lines.append(
             f"| grounding (first-frame guess nearest the named object) | {_pct(g)} | {_trials_ci(g)} | {g['chance']:.0%} | — |"
         )
+    prediction = report.get("prediction", {})
+    lines += [
+        f"| prediction: {PREDICTION_ROWS[key]} | {_pct(p)} | {_trials_ci(p)} | {p['chance']:.0%} | — |"
+        for key, p in prediction.items()
+        if key in PREDICTION_ROWS
+    ]
+    if "unscored" in prediction:
+        lines += ["", f"Predictions not scored: {prediction['unscored']}."]
     lines += ["", "Each face at three levels: landed within 5 cm, within 2 cm, achieved the program.", ""]
     lines += ["| face | " + " | ".join(LEVELS) + " |", "|---|" + "---|" * len(LEVELS)]
     lines += [
@@ -156,6 +170,19 @@ def plots(report: dict) -> list[str]:
                 ax.text(j, i, f"{v:.0%}", ha="center", va="center", color="white" if v < 0.6 else "black", fontsize=8)
         fig.colorbar(im, ax=ax, fraction=0.05)
         ax.set_title("per slot")
+        images.append(_png(fig))
+    predicted = [k for k in PREDICTION_ROWS if k in report.get("prediction", {})]
+    if predicted:
+        p = report["prediction"]
+        rates = [p[k]["rate"] or 0.0 for k in predicted]
+        lo, hi = zip(*(p[k]["ci_trials"] for k in predicted))
+        fig, ax = plt.subplots(figsize=(6, 2.8))
+        ax.bar(predicted, rates, yerr=[np.subtract(rates, lo), np.subtract(hi, rates)], capsize=4, color="#8e6bb5")
+        for i, k in enumerate(predicted):
+            ax.hlines(p[k]["chance"], i - 0.4, i + 0.4, colors="#c0392b", linestyles="dashed")
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("on the object (95% CI, trials)")
+        ax.set_title("where the first predicted point falls (dashed: chance)")
         images.append(_png(fig))
     d = report["distances"]
     if d["n"]:

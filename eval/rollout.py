@@ -5,7 +5,9 @@ and every object's position at each control step (step 0 is the initial state), 
 steps taken and, when the rollout broke, why. rollouts.parquet columns: row (int), steps (int),
 ee (list of [x, y, z]), objects (JSON `{id: [[x, y, z], ...]}`), error (str or null), and
 optionally located ([x, y, z] or null: where a policy that says so — it has `locate(observation)`
-— believes the named object stands, asked on the first frame; the grounding readout) and
+— believes the named object stands, asked on the first frame; the grounding readout),
+predicted ([column, row] or null: where a policy that says so — it has `predicted()` — predicts its
+motion will go, in the agentview frame's pixels, with its first action chunk; the prediction face) and
 sim_success (bool: a simulator's own verdict on the row's ask at the end, where it has one: LIBERO's
 predicates under `sim=libero`).
 """
@@ -35,6 +37,7 @@ class Log:
     objects: dict[str, list[list[float]]] = field(default_factory=dict)
     error: str | None = None
     located: list[float] | None = None
+    predicted: list[float] | None = None  # [column, row] in the agentview frame, with the first chunk
     sim_success: bool | None = None  # the simulator's own verdict on the row's ask (LIBERO's predicates), where it has one
 
     @property
@@ -55,6 +58,7 @@ class Log:
             "objects": json.dumps(self.objects),
             "error": self.error,
             "located": self.located,
+            "predicted": self.predicted,
             **verdict,
         }
 
@@ -94,6 +98,28 @@ def check_action(action: object, features: FeatureLayout = NATIVE) -> tuple[np.n
     if not np.all(np.isfinite(a)):
         return None, "action contains NaN or inf"
     return a.astype(np.float32), None
+
+
+def check_prediction(predicted: object, size: int) -> tuple[list[float] | None, str | None]:
+    """A prediction as the log records it — the point [column, row] in the agentview frame's
+    pixels (a heat map (size, size) gives its peak's centre) — or the reason it is not one."""
+    try:
+        p = np.asarray(predicted, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None, f"prediction is not numeric ({type(predicted).__name__})"
+    if p.shape == (size, size):
+        if not np.all(np.isfinite(p)):
+            return None, "prediction heat map contains NaN or inf"
+        row, column = np.unravel_index(int(np.argmax(p)), p.shape)
+        return [column + 0.5, row + 0.5], None
+    if p.shape != (2,):
+        return None, (
+            f"prediction has shape {p.shape}: expected a point [column, row] (2,) or a heat map ({size}, {size}) "
+            "over the agentview frame"
+        )
+    if not np.all(np.isfinite(p)) or not np.all((p >= 0) & (p <= size)):
+        return None, f"prediction {p.tolist()} is not a point inside the {size} x {size} agentview frame"
+    return [float(v) for v in p], None
 
 
 class Sim(Protocol):
@@ -198,6 +224,7 @@ class Runner:
             log.error = f"the simulator could not start the row: {exc}"
             return log
         locate = getattr(self.policy, "locate", None)
+        predicted = getattr(self.policy, "predicted", None)
         wants = getattr(self.policy, "wants_observation", None)
         instruction = context.instruction
         for t in range(int(row["max_steps"])):
@@ -209,6 +236,13 @@ class Runner:
                 if t == 0 and locate is not None:
                     log.located = [float(v) for v in locate(observation)]
                 action = self.policy.act(observation)
+                if t == 0 and predicted is not None:  # the prediction made with the first chunk
+                    made = predicted()
+                    if made is not None:
+                        log.predicted, problem = check_prediction(made, spec.sim.image_size)
+                        if problem:
+                            log.error = f"step 0: {problem}"
+                            break
             except ProfileMismatch:
                 raise
             except Exception as exc:

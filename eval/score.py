@@ -32,6 +32,13 @@ report.json schema (version 2):
   grounding = {k, n, rate, ci, ci_trials, chance} for policies that predict where the named
       object is (a `located` column in the logs): swap rollouts whose first-frame prediction is
       nearest the newly named object, whatever the arm then did
+  prediction = {name, original, task, occ: {k, n, rate, ci, ci_trials, chance}} for policies that
+      predict where their motion will go (a `predicted` column: [column, row] in the agentview
+      frame, with the first action chunk): the object the point falls on in the exam's map of that
+      frame (answers.parquet frame_objects; within 4% of the frame's width of its pixels) — on a swap
+      row that names another object the newly named one (name) or the original (original), on task
+      and occ rows the named one (occ: the cameras blank, the blind control); chance is one over the
+      objects the frame shows. {unscored: why} where the exam predates the maps
   init_value = {faces: {face: rate}, trusted}: the same scoring on every rollout's initial
       state (a do-nothing policy); rates are trusted only when all are 0
   reach_probe.<face> = {reached_target, went_distractor, neither}: every failed rollout
@@ -56,13 +63,14 @@ from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
 from core import contact, worlds
-from core.exam import LANDING, REACH_THRESHOLDS, Exam, ExamError, read
+from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, ExamError, decode_objects, read
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
@@ -75,6 +83,7 @@ HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 POLICY_KEY, SIM_KEY = b"deconfound.policy", b"deconfound.sim"  # rollouts.parquet's metadata: who acted, and where
 BASELINE_MEASURED = f"`{SHORTCUT}` on the same rows, in our simulator (python -m eval measures it once per exam and caches it)"
 SIM_SUCCESS = "sim_success"  # rollouts.parquet's column of a simulator's own verdict (eval/rollout.py)
+PREDICTED_FACES = {"swap": "name", "task": "task", "occ": "occ"}  # faces whose first prediction is scored -> its key
 
 
 class LogError(ValueError):
@@ -133,7 +142,14 @@ def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
 START_TOLERANCE = 0.002  # m: how far a logged step-0 object may sit from where its trial starts
 
 
-Logged = tuple[np.ndarray, dict[str, np.ndarray], str | None, np.ndarray | None]  # ee, objects, error, located
+class Logged(NamedTuple):
+    """One rollout's log as the scorer reads it."""
+
+    ee: np.ndarray  # (steps + 1, 3)
+    objects: dict[str, np.ndarray]  # id -> (steps + 1, 3)
+    error: str | None
+    located: np.ndarray | None  # (3,): where the policy believes the named object stands
+    predicted: np.ndarray | None  # (2,): [column, row] in the agentview frame, where it predicts its motion will go
 
 
 def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
@@ -168,10 +184,23 @@ def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
                     "nor where reset() leaves it after the settle steps; log step 0 before any action"
                 )
         error = log["error"] if isinstance(log["error"], str) else None
-        located = log.get("located")
-        guess = None if located is None or (np.ndim(located) == 0 and pd.isna(located)) else np.asarray(located, float)
-        parsed[int(log["row"])] = (ee, objects, error, guess)
+        parsed[int(log["row"])] = Logged(ee, objects, error, _optional(log, "located", 3), _optional(log, "predicted", 2))
     return parsed
+
+
+def _optional(log: pd.Series, column: str, size: int) -> np.ndarray | None:
+    """An optional per-rollout vector column (`located`, `predicted`): None where absent or null,
+    else `size` finite numbers, or a LogError naming the row."""
+    value = log.get(column)
+    if value is None or (np.ndim(value) == 0 and pd.isna(value)):
+        return None
+    try:
+        vector = np.asarray(value, float)
+    except (TypeError, ValueError):
+        vector = np.zeros(0)
+    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
+        raise LogError(f"row {log['row']}: column {column!r} must hold {size} finite numbers or null, got {value!r}")
+    return vector
 
 
 def _starts(row: pd.Series) -> list[dict[str, np.ndarray]]:
@@ -228,11 +257,13 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     per_slot: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))  # (ok, trial)
     per_object: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))
     grounding: list[tuple[float, int, float]] = []
+    prediction: dict[str, list[tuple[float, int, float]]] = defaultdict(list)  # (on the asked object, trial, chance)
+    size, unmapped = int(exam.meta["observation"]["image_size"]), 0
     verdicts = _verdicts(logs)  # the simulator's own judgement of each row's ask (sim=libero), where logged
     judged_by_sim: dict[str, list[tuple[float, int]]] = defaultdict(list)
     errors = []
     for _, row in exam.trials.iterrows():
-        ee, objects, error, located = parsed[int(row["row"])]
+        ee, objects, error, located, predicted = parsed[int(row["row"])]
         judged = judge(exam, row, ee, objects)
         at_start = judge(exam, row, ee, objects, steps=0)
         asked = (row["target"], row["program"])
@@ -266,6 +297,14 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             count("switch_blind", original, "5cm")
         else:
             ok = count(face, asked, "achieved")
+        if predicted is not None and face in PREDICTED_FACES:
+            if row[FRAME_OBJECTS] is None:
+                unmapped += 1
+            elif row["target"] != row["original_target"] or face != "swap":  # a swap that names another object
+                on, seen = predicted_on(row, predicted, size)
+                prediction[PREDICTED_FACES[face]].append((float(on == row["target"]), trial, 1.0 / max(seen, 1)))
+                if face == "swap":
+                    prediction["original"].append((float(on == row["original_target"]), trial, 1.0 / max(seen, 1)))
         verdict = verdicts.get(int(row["row"]))
         if verdict is not None:
             judged_by_sim["swap_success" if face == "swap" else face].append((float(verdict and not error), trial))
@@ -306,7 +345,34 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     if grounding:
         hits, trials, chances = zip(*grounding)
         report["grounding"] = {**clustered_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
+    if prediction:
+        report["prediction"] = {
+            face: {**clustered_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
+            for face, (hits, trials, chances) in ((f, zip(*e)) for f, e in prediction.items())
+        }
+    elif unmapped:
+        report["prediction"] = {
+            "unscored": f"{unmapped} rollouts logged a prediction, but the exam holds no first-frame object maps "
+            f"(answers.parquet {FRAME_OBJECTS}: made before the prediction face); make the exam again to score them"
+        }
     return report
+
+
+def predicted_on(row: pd.Series, point: np.ndarray, size: int) -> tuple[str | None, int]:
+    """The object a predicted point [column, row] falls on in the row's first frame — the one whose
+    pixels (their centres) come nearest, if within PREDICTION_RADIUS of the frame's width — and how
+    many of the scene's objects that frame shows (chance is one over them)."""
+    spec = EpisodeSpec.from_json(row["spec"])
+    labels = decode_objects(row[FRAME_OBJECTS], size)
+    rows, columns = np.nonzero(labels)
+    seen = np.unique(labels[rows, columns])
+    if not len(rows):
+        return None, 0
+    gaps = np.hypot(columns + 0.5 - point[0], rows + 0.5 - point[1])
+    nearest = int(np.argmin(gaps))
+    if gaps[nearest] > PREDICTION_RADIUS * size:
+        return None, len(seen)
+    return spec.objects[int(labels[rows[nearest], columns[nearest]]) - 1].id, len(seen)
 
 
 def _verdicts(logs: pd.DataFrame) -> dict[int, bool]:
@@ -401,7 +467,7 @@ def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
     obeyed name: what lets two policies' swaps be compared row by row."""
     parsed, obeyed = parsed_logs(logs, exam), {}
     for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
-        ee, objects, error, _ = parsed[int(row["row"])]
+        ee, objects, error, *_ = parsed[int(row["row"])]
         obeyed[int(row["row"])] = not error and landed(judge(exam, row, ee, objects)) == (row["target"], row["program"])
     return obeyed
 

@@ -67,18 +67,31 @@ class Cameras:
         name: its top-level body's without `_main`; '' for none), from MuJoCo's segmentation
         render with the frames' options, mirrored as they are: what the picture tests judge each
         object by (scripts/libero_reference.py writes LIBERO's)."""
-        m, layout = self.scene.model, self.scene.layout
+        m = self.scene.model
         if self._names is None:  # each geom's object, and '' for no geom
             roots = m.body_rootid[m.geom_bodyid]
             self._names = np.array([m.body(int(r)).name.removesuffix("_main") for r in roots] + [""])
-        names, out = self._names, {}
+        return {cam: self._names[geoms] for cam, geoms in self.geoms().items()}
+
+    def object_indices(self, camera: str, ids: list[str]) -> np.ndarray:
+        """Per pixel of `camera`'s frame, 1 + the index in `ids` of the placed object it shows (0
+        for anything else), uint8: the exam's map of its first frame that a predicted point is
+        judged by (core/exam.py `frame_objects`)."""
+        lookup = np.zeros(self.scene.model.ngeom + 1, np.uint8)  # geom -1 (no geom) reads the last entry
+        for k, i in enumerate(ids, start=1):
+            lookup[list(self.scene.placed[i].geom_ids)] = k
+        return lookup[self.geoms((camera,))[camera]]
+
+    def geoms(self, cameras: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+        """Per camera, the geom each pixel of its frame shows (-1 for none), mirrored as the frames are."""
+        layout, out = self.scene.layout, {}
         self.renderer.enable_segmentation_rendering()
         try:
-            for cam in self.cameras:
+            for cam in cameras or self.cameras:
                 self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.options[cam])
                 seg = self.renderer.render()  # (objid, objtype) per pixel
-                labels = names[np.where(seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM, seg[..., 0], -1)]
-                out[cam] = labels[:, ::-1] if layout.mirrored else labels
+                geoms = np.where(seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM, seg[..., 0], -1)
+                out[cam] = geoms[:, ::-1] if layout.mirrored else geoms
         finally:
             self.renderer.disable_segmentation_rendering()
         return out

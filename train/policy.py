@@ -86,6 +86,7 @@ class CheckpointPolicy:
         self.replan = min(replan, self.model.config.chunk)
         self._embeddings: dict[str, object] = {}
         self._queue: list[np.ndarray] = []
+        self._predicted: np.ndarray | None = None
 
     def check(self, features: dict[str, tuple[int, ...]]) -> None:
         """Refuse an exam whose cameras, frame size, state or action are not this checkpoint's."""
@@ -96,13 +97,16 @@ class CheckpointPolicy:
 
     def reset(self, context: Context) -> None:
         self._queue = []
+        self._predicted = None
 
     def chunk(self, observation: dict) -> np.ndarray:
         """The next `chunk` actions (chunk, action size) for an observation dict."""
-        return self._forward(observation)[0]
+        actions, _, self._predicted = self._forward(observation)
+        return actions
 
-    def _forward(self, observation: dict) -> tuple[np.ndarray, np.ndarray]:
-        """(the action chunk, the located target in world coordinates) for an observation."""
+    def _forward(self, observation: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the action chunk, the located target in world coordinates, the pointer's peak as a
+        point [column, row] in the agentview frame's pixels) for an observation."""
         import torch
 
         size, features = self.model.config.image_size, self.model.config.features
@@ -117,13 +121,21 @@ class CheckpointPolicy:
             frames = {c: np.ascontiguousarray(observation[features.image_key(c)]) for c in self.model.cameras}
             images = {c: torch.from_numpy(frame)[None] for c, frame in frames.items()}
             state = torch.from_numpy(np.asarray(observation[STATE_KEY], np.float32))[None]
-            actions, located, _ = self.model(images, state, self._embeddings[text])
-            return self.model.denormalise(actions)[0].numpy(), self.model.world_position(located)[0].numpy()
+            actions, located, pointer = self.model(images, state, self._embeddings[text])
+        h, w = pointer.shape[1:]
+        row, column = np.unravel_index(int(pointer[0].argmax()), (h, w))
+        point = np.array([(column + 0.5) * size / w, (row + 0.5) * size / h])  # the cell's centre (train/fit.py point_loss)
+        return self.model.denormalise(actions)[0].numpy(), self.model.world_position(located)[0].numpy(), point
 
     def locate(self, observation: dict) -> np.ndarray:
         """Where the auxiliary head believes the named object stands (world x, y, z): the
         battery's grounding readout, which does not depend on the motor."""
         return self._forward(observation)[1]
+
+    def predicted(self) -> np.ndarray | None:
+        """Where the pointer (train/fit.py `point_weight`) says the motion will go, from the
+        observation the last chunk was predicted from: the prediction face's readout."""
+        return self._predicted
 
     def wants_observation(self) -> bool:
         """Whether the next act() reads its observation: not while it executes a chunk (the runner

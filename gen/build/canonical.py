@@ -305,8 +305,9 @@ def build(options: CanonicalOptions) -> None:
     suite, out = _options(options)
     from tqdm import tqdm
 
-    from gen.build.exam import switch_step
+    from gen.build.exam import first_frame, switch_step
     from oracle.ik import ArmIK
+    from oracle.render import Cameras
     from oracle.scene import scene_for
 
     started = time.perf_counter()
@@ -320,6 +321,7 @@ def build(options: CanonicalOptions) -> None:
     }
     scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
     ik = ArmIK(np.asarray(world.robot_home), world.name)
+    cameras = Cameras(scene, sim.image_size, sim.cameras)
     rows, specs = [], []
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
     for task in suite.tasks:
@@ -329,11 +331,15 @@ def build(options: CanonicalOptions) -> None:
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
             settled = scene.settled(spec)
+            seen = first_frame(cameras, spec)
             switch = switch_step(scene, ik, suite.referent, spec, state) if options.switches else None
-            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, settled, switch, options.switches)
+            rows += exam.trial_rows(
+                len(specs), spec, values, state, world.episode_steps, ee, settled, switch, options.switches, seen
+            )
             specs.append(spec)
             bar.update()
     bar.close()
+    cameras.close()
     report = audit(suite.referent, specs)
     with staging(out) as root:
         root.mkdir(parents=True)

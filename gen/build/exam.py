@@ -3,7 +3,8 @@
 has solved.
 
 Every trial is demonstrated once (resampling poses as for datasets) to prove it solvable and to
-record its initial state and rollout horizon; no video is written, so the exam is built in a
+record its initial state, rollout horizon and which object each pixel of its first frame shows;
+no video is written, so the exam is built in a
 throwaway folder and published whole.
 """
 
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
     from gen.build.produce import Producer
     from oracle.episode import Demo
     from oracle.ik import ArmIK
+    from oracle.render import Cameras
     from oracle.scene import Scene
 
 HORIZON_FACTOR, HORIZON_SLACK = 1.5, 20  # rollout steps allowed: 1.5x the longest oracle demo of the trial, plus 20
@@ -82,9 +84,18 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
         ee = [float(v) for v in producer.scene.ee_pos()]
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
         settled = producer.scene.settled(demo.spec)
+        seen = first_frame(producer.cameras, demo.spec)
         switch = switch_step(producer.scene, producer.ik, referent, demo.spec, state) if switches else None
-        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, settled, switch, switches)
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, settled, switch, switches, seen)
+    producer.close()
     return rows
+
+
+def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
+    """Which object each pixel of the agentview frame a rollout first sees shows (the scene as
+    its rollouts start, after the profile's settle steps): what a predicted point is judged by."""
+    ids = [o.id for o in spec.objects]
+    return exam.encode_objects(cameras.object_indices(spec.sim.layout.agentview, ids))
 
 
 def switch_step(scene: Scene, ik: ArmIK, referent: Referent, spec: EpisodeSpec, state: list[float]) -> int | None:

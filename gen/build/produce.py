@@ -53,7 +53,7 @@ class Producer:
         inventory = assets if assets is not None else referent.assets()
         self.scene: Scene = scene_for(inventory, sim.profile, sim.world, sim.look)
         self.ik = ArmIK(np.asarray(sim.robot_home), sim.world)
-        self._cameras: Cameras | None = None  # made on first use: exams never render
+        self._cameras: Cameras | None = None  # made on first use: an exam draws only its first frames' object maps
 
     @property
     def cameras(self) -> Cameras:
