@@ -22,7 +22,7 @@ from typing import Any, List
 import gen.build.produce as produce
 from core import worlds
 from gen.config import GenConfig, load_referent, validate
-from gen.lerobot.writer import Layout, LeRobotWriter
+from gen.lerobot.writer import LeRobotWriter, Recording
 from gen.planning.plan import designs, sim_settings
 from jobs.cli import main
 from oracle.render import Cameras
@@ -77,7 +77,7 @@ def run(cfg: GenConfig) -> float:
     oracle = record = write = 0.0
     first_try = attempts = frames = 0
     features = sim.layout
-    writer = LeRobotWriter(Path(cfg.out), Layout(sim.fps, size, sim.cameras, features.state_names, features.action_names))
+    writer = LeRobotWriter(Path(cfg.out), Recording(sim.fps, size, sim.cameras, features.state_names, features.action_names))
     for i, design in enumerate(plan):
         t0 = time.perf_counter()
         demo, failures = producer.demonstrate(design, i, 0, max_attempts=10)
