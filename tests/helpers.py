@@ -159,7 +159,7 @@ def canonical_reports(out: Path, trials: dict[str, int], world: str = "libero_ob
     from eval.registry import make
     from gen.build.canonical import CanonicalOptions, build
 
-    build(CanonicalOptions(world=world, states=1, image_size=32, out=str(out / "canonical")))
+    build(CanonicalOptions(world=world, states=1, image_size=32, out=str(out / "canonical"), switches=0))  # switch: its own test
     exam = read(out / "canonical")
     reports = {}
     for policy, n in trials.items():

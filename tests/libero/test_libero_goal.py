@@ -171,7 +171,7 @@ def test_on_displaced_objects_the_remembered_layout_fails(tmp_path: Path) -> Non
     """LIBERO-Goal's shortcut: reaching for where LIBERO's one layout stands things. On LIBERO's
     own states it does the task (above); on a deconfounded exam, every object displaced, it
     mostly carries the wrong thing or to the wrong place."""
-    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=12", "split=exam", "image_size=32", "seed=3")
+    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=12", "split=exam", "image_size=32", "seed=3", "switches=0")
     exam = read(root)
     report, _ = take(
         exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False

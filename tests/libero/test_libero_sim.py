@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.exam import read
+from core.exam import SWITCH, read
 from core.layout import STATE_KEY, TASK_KEY
 from eval.battery import take
 from eval.policies import Context
@@ -29,49 +29,59 @@ STEPS = 12  # each rollout: the settle steps, then this many of the policy's act
 
 class Scripted:
     """The same deltas every rollout (down and across, the gripper open), from observations only;
-    what it was handed is kept per row."""
+    what it was handed is kept per row. With `through_switch`, a switch row then holds still until
+    one step past its switch (what the policy is shown then is asserted)."""
 
     name = "scripted"
     needs_images = True
 
-    def __init__(self) -> None:
+    def __init__(self, through_switch: bool = False) -> None:
         self.seen: dict[int, list[dict]] = {}
+        self.through_switch = through_switch
 
     def reset(self, context: Context) -> None:
         self.row, self.t = context.seed, 0
         self.seen[self.row] = []
+        self.until = context.switch[0] + 1 if self.through_switch and context.switch else STEPS
 
     def act(self, observation: dict) -> np.ndarray | None:
         self.seen[self.row].append({k: np.array(v) if k != TASK_KEY else v for k, v in observation.items()})
-        if self.t == STEPS:
+        if self.t == max(STEPS, self.until):
             return None
         self.t += 1
+        if self.t > STEPS:
+            return np.array([0, 0, 0, 0, 0, 0, -1.0], np.float32)
         return np.array([0.3 * np.cos(self.t / 4), 0.3 * np.sin(self.t / 4), -0.4, 0.0, 0.0, 0.05, -1.0], np.float32)
 
 
-def _both(exam_root: Path, tmp_path: Path) -> tuple[dict, dict, Scripted, Scripted]:
+def _both(exam_root: Path, tmp_path: Path, through_switch: bool) -> tuple[dict, dict, Scripted, Scripted]:
     exam = read(exam_root)
     rows = exam.trials[exam.trials["trial"] < 2]
-    ours, theirs = Scripted(), Scripted()
+    ours, theirs = Scripted(through_switch), Scripted(through_switch)
     mine, _ = take(exam, rows, ours, tmp_path / "ours", baseline=False)
     libero, _ = take(exam, rows, theirs, tmp_path / "libero", baseline=False, sim="libero")
     return mine, libero, ours, theirs
 
 
-def _agree(exam_root: Path, tmp_path: Path) -> tuple[dict, Scripted]:
+def _agree(exam_root: Path, tmp_path: Path, through_switch: bool = False) -> tuple[dict, Scripted]:
     """Both simulators on the exam's first 2 trials: the same observations and the same motion."""
-    mine, libero, ours, theirs = _both(exam_root, tmp_path)
+    mine, libero, ours, theirs = _both(exam_root, tmp_path, through_switch)
     assert mine["simulator"] == "ours" and libero["simulator"] == "libero" and not libero["errors"]
-    assert {"task", "swap_success", "occ", "nonsense"} == set(libero["sim_success"])
+    assert {"task", "swap_success", "occ", "nonsense", "switch"} == set(libero["sim_success"])
     assert "LIBERO's own" in (tmp_path / "libero" / "report.md").read_text()
     exam = read(exam_root)
     for row, seen in theirs.seen.items():
         trial = exam.trials.set_index("row").loc[row]
-        assert len(seen) == STEPS + 1 and [o[TASK_KEY] for o in seen] == [trial["instruction"]] * (STEPS + 1)
+        switch = json.loads(trial[SWITCH])
+        shown = [trial["instruction"]] * len(seen)
+        if switch and through_switch:  # from its step on, the new instruction
+            shown[switch["step"] :] = [switch["instruction"]] * (len(seen) - switch["step"])
+        assert len(seen) == max(STEPS, switch["step"] + 1 if switch and through_switch else 0) + 1
+        assert [o[TASK_KEY] for o in seen] == shown
         frames = [k for k in seen[0] if k.startswith("observation.images.")]
         assert len(frames) == 2 and all(seen[0][k].shape == (32, 32, 3) for k in frames)
         assert all(bool(seen[0][k].any()) != bool(trial["occluded"]) for k in frames), "occ: blank frames, else LIBERO's"
-        for t in (0, STEPS):  # the state as our simulator computes it at the same moment
+        for t in (0, len(seen) - 1):  # the state as our simulator computes it at the same moment
             np.testing.assert_allclose(seen[t][STATE_KEY], ours.seen[row][t][STATE_KEY], atol=2e-3)
         for k in frames:  # LIBERO's frames turned as the libero profile records ours
             assert np.abs(seen[0][k].astype(int) - ours.seen[row][0][k].astype(int)).mean() < 12, k
@@ -91,8 +101,9 @@ def canonical(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, tmp_path: Path) -> None:
     """LIBERO's own task files and initial states: the hand and the objects follow the same paths in
-    both simulators (our OSC acts as robosuite 1.4's, settle steps included), within millimetres."""
-    _agree(canonical, tmp_path)
+    both simulators (our OSC acts as robosuite 1.4's, settle steps included), within millimetres;
+    a switch row shows the new instruction from its step on in LIBERO's simulator too."""
+    _agree(canonical, tmp_path, through_switch=True)
     from eval.agreement import compare
     from eval.score import read_logs
 

@@ -131,7 +131,7 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
     (`position`) completes the task rows and obeys the swaps only where two of LIBERO's tasks share
     a layout (the stove and cabinet bowls: tasks 7 and 9), going to the remembered bowl; `nothing`
     scores 0 everywhere."""
-    build(CanonicalOptions(world=SUITE, states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all")))
+    build(CanonicalOptions(world=SUITE, states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all"), switches=0))
     assert read(tmp_path / "all").meta["trials"] == 10 * CANONICAL_STATES
     reports = canonical_reports(tmp_path, {"oracle": 10, "position": 10, "nothing": 1}, SUITE)  # nothing runs to the horizon
     oracle, position, nothing = (reports[policy]["faces"] for policy in ("oracle", "position", "nothing"))
@@ -141,7 +141,7 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
 
 
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=6", "split=exam", "image_size=32", "seed=2")
+    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=6", "split=exam", "image_size=32", "seed=2", "switches=0")
     exam = read(root)
     report, _ = take(
         exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False

@@ -146,7 +146,7 @@ def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
     on the first state of each task the oracle completes the task
     and obeys every rename, while the shortcut LIBERO's layouts reward (`position`) completes the
     task and obeys no rename, going to the original target; `nothing` scores 0 everywhere."""
-    build(CanonicalOptions(states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all")))
+    build(CanonicalOptions(states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all"), switches=0))
     assert read(tmp_path / "all").meta["trials"] == 10 * CANONICAL_STATES
     reports = canonical_reports(tmp_path, {"oracle": 5, "position": 5, "nothing": 1})  # nothing runs to the horizon
     assert all(report["init_value"]["trusted"] for report in reports.values())
@@ -177,7 +177,7 @@ def test_the_named_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: 
 
 
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=4", "split=exam", "image_size=32", "seed=2")
+    root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=4", "split=exam", "image_size=32", "seed=2", "switches=0")
     exam = read(root)
     position = make("position")
     report, _ = take(exam, exam.trials, position, tmp_path / "position", workers=2, policy_name="position", baseline=False)

@@ -62,7 +62,9 @@ def test_exam_format_reads_without_our_code(small_exam: Path) -> None:
 
 def test_reference_policies_rank_as_the_instrument_demands(tmp_path_factory: pytest.TempPathFactory) -> None:
     exam = read(
-        make_dataset(tmp_path_factory.mktemp("exam40") / "object-exam", "referent=object", "n=40", "split=exam", "seed=3")
+        make_dataset(  # the switch face has its own test (tests/sim/test_new_faces.py)
+            tmp_path_factory.mktemp("exam40") / "object-exam", "referent=object", "n=40", "split=exam", "seed=3", "switches=0"
+        )
     )
     out = tmp_path_factory.mktemp("runs")
     first = exam.trials[exam.trials["trial"] < 5]  # `nothing` runs every row to its horizon: a few trials show its zeros
