@@ -26,7 +26,7 @@ from core.rates import Rate
 from eval.score import SIM_SUCCESS, LogError, clustered_rate, judge, landed, parsed_logs, read_logs, score
 from jobs.cli import UserError, main
 
-FACES = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense")
+FACES = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense", "switch_obeyed", "switch_blind")
 
 
 def outcomes(exam: Exam, logs: pd.DataFrame) -> tuple[dict[int, object], dict[int, bool]]:

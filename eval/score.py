@@ -258,7 +258,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
     per_object: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))
     grounding: list[tuple[float, int, float]] = []
     prediction: dict[str, list[tuple[float, int, float]]] = defaultdict(list)  # (on the asked object, trial, chance)
-    size, unmapped = int(exam.meta["observation"]["image_size"]), 0
+    unmapped = 0
     verdicts = _verdicts(logs)  # the simulator's own judgement of each row's ask (sim=libero), where logged
     judged_by_sim: dict[str, list[tuple[float, int]]] = defaultdict(list)
     errors = []
@@ -301,7 +301,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
             if row[FRAME_OBJECTS] is None:
                 unmapped += 1
             elif row["target"] != row["original_target"] or face != "swap":  # a swap that names another object
-                on, seen = predicted_on(row, predicted, size)
+                on, seen = predicted_on(row, predicted, int(exam.meta["observation"]["image_size"]))
                 prediction[PREDICTED_FACES[face]].append((float(on == row["target"]), trial, 1.0 / max(seen, 1)))
                 if face == "swap":
                     prediction["original"].append((float(on == row["original_target"]), trial, 1.0 / max(seen, 1)))

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from core import success, worlds
-from core.exam import PUBLIC_COLUMNS, read
+from core.exam import PUBLIC_COLUMNS, SWITCH, read
 from gen.config import GenConfig
 from gen.planning.plan import default_sim, plan
 from helpers import make_dataset
@@ -193,13 +193,15 @@ def test_trials_parquet_gives_away_nothing_but_the_instruction(exams: dict[str, 
     withholds every answer field, and nothing in it but the object list (and the inventory of
     kinds, the same in every trial) names an object."""
     trials = pd.read_parquet(exams[referent] / "trials.parquet")
-    assert tuple(trials.columns) == PUBLIC_COLUMNS
-    shared = [c for c in trials.columns if c not in ("row", "instruction", "occluded")]
+    assert tuple(trials.columns) == (*PUBLIC_COLUMNS, SWITCH)
+    shared = [c for c in trials.columns if c not in ("row", "instruction", "occluded", SWITCH)]
     assert trials["scene"].map(lambda s: json.dumps(json.loads(s)["assets"])).nunique() == 1  # the referent's inventory
     for _, rows in trials.groupby("trial"):
         for column in shared:
             assert rows[column].map(lambda v: json.dumps(v, default=list)).nunique() == 1, column
         assert rows["occluded"].sum() == 1
+        switched = [json.loads(v) for v in rows[SWITCH] if v != "{}"]  # one switch row, to a swap's instruction
+        assert len(switched) == 1 and switched[0]["instruction"] in set(rows["instruction"]) - {rows["instruction"].iloc[0]}
         scene = json.loads(rows["scene"].iloc[0])
         assert (scene["target"], scene["instruction"], scene["template"], scene["counterfactuals"]) == ("", "", "", [])
         assert (scene["task"]["program"], scene["task"]["params"]) == ("", {})
