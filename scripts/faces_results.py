@@ -31,7 +31,7 @@ PICTURE = "faces.png"
 WORLDS = {"native": "native object exam", "libero_object": "LIBERO-Object canonical exam"}
 POLICIES = ("oracle", "position", "deconfounded", "confounded")
 SWITCH = (("obeyed_name", "swap: obeyed"), ("switch_obeyed", "switch: obeyed"), ("switch_blind", "switch: blind"))
-PREDICTION = (("task", "task"), ("name", "swap: on the new name"), ("original", "swap: on the original"), ("occ", "occ"))
+PREDICTION = (("task", "task"), ("name", "swap: new name"), ("original", "swap: original"), ("occ", "occ"))
 
 
 def _rate(r: dict | None) -> str:
