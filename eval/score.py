@@ -173,6 +173,10 @@ def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
     parsed = {}
     for _, log in logs.iterrows():
         ee, objects = _positions(log)
+        error = log["error"] if isinstance(log["error"], str) else None
+        if error and not len(ee) and int(log["row"]) in starts:  # broken before its first step: it stayed where it started
+            start = dict(starts[int(log["row"])][0])
+            ee, objects = start.pop("the end effector")[None], {k: v[None] for k, v in start.items()}
         if not len(ee) or any(len(v) != len(ee) for v in objects.values()):
             raise LogError(f"row {log['row']}: every object needs one position per end-effector position")
         if int(log["row"]) in starts:
@@ -183,7 +187,6 @@ def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
                     f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}) "
                     "nor where reset() leaves it after the settle steps; log step 0 before any action"
                 )
-        error = log["error"] if isinstance(log["error"], str) else None
         parsed[int(log["row"])] = Logged(ee, objects, error, _optional(log, "located", 3), _optional(log, "predicted", 2))
     return parsed
 

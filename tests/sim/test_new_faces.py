@@ -126,6 +126,22 @@ def test_a_prediction_of_the_wrong_shape_breaks_its_rollout_by_name_and_a_log_of
         score(dataclasses.replace(taken, trials=rows.reset_index(drop=True)), logs, "wrong")
 
 
+class BrokenReset(Oracle):
+    def reset(self, context: Context) -> None:
+        raise RuntimeError("no weights here")
+
+
+def test_a_rollout_broken_before_its_first_step_is_an_error_in_the_report_not_a_crash(exam: Path, tmp_path: Path) -> None:
+    """A policy whose reset fails (or a simulator that cannot start the row) logs no step; the
+    report still comes out, the row failed and named (a long run must not lose its report)."""
+    taken = read(exam)
+    rows = taken.trials.head(2)
+    report = take(taken, rows, BrokenReset(), tmp_path / "broken", baseline=False)[0]
+    assert [e["row"] for e in report["errors"]] == [0, 1]
+    assert report["errors"][0]["error"] == "policy reset failed: RuntimeError: no weights here"
+    assert report["faces"]["task"]["k"] == 0
+
+
 def test_an_exam_made_before_the_maps_says_its_predictions_went_unscored(exam: Path, tmp_path: Path) -> None:
     old = tmp_path / "old"
     old.mkdir()
