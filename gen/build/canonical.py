@@ -109,14 +109,15 @@ class Suite:
         if delivered == design.instruction:
             return design.counterfactuals, {}
         base = libero.problem(self.world.suite, libero.base_task(self.name, task))
-        base_target = base.objects.get(base.goal[0][1]) if base.goal and len(base.goal[0]) > 1 else None
+        named = base.goal[0][1] if base.goal and len(base.goal[0]) > 1 else None
+        base_target = {named, base.objects.get(named)} - {None}  # a design names a target by instance or by category
         kept, left = [], {}
         for cf in design.counterfactuals:
             old, new = cf.changed
             found = re.search(_loosely(old), delivered, re.IGNORECASE)
             if found is None:
                 left[cf.target] = f"the suite's instruction ({delivered!r}) does not say {old!r}, so no word of it names another"
-            elif cf.target == base_target and cf.target != design.target:
+            elif cf.target in base_target and cf.target != design.target:
                 left[cf.target] = f"it names the base task's own {new}, which LIBERO's layout leads to whatever the words"
             else:
                 kept.append(replace(cf, instruction=delivered[: found.start()] + new + delivered[found.end() :]))
