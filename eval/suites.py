@@ -118,12 +118,25 @@ def run(options: SuitesOptions) -> None:
             )  # fmt: skip
         except FeatureMismatch as exc:
             raise UserError(str(exc)) from None
-        rows.append({"suite": name, "exam": report["exam"], "faces": {f: report["faces"][f] for f in FACES}})
-        print(f"{name}: " + ", ".join(f"{f} {report['faces'][f]['rate']:.0%}" for f in FACES))
+        rows.append(suite_row(name, report))
+        print(f"{name}: " + ", ".join(f"{f} {_short(rows[-1]['faces'][f])}" for f in FACES))
     (out / "report.json").write_text(json.dumps({"policy": options.policy, "suites": rows}, indent=2))
     (out / "report.md").write_text(table(options.policy, rows))
     picture(options.policy, rows, out / PICTURE)
     print(f"wrote {out}/report.json, report.md, {PICTURE}")
+
+
+EMPTY = {"k": 0, "n": 0, "rate": None, "ci": [0.0, 1.0], "ci_trials": [0.0, 1.0]}  # a face the suite has no rows for
+
+
+def suite_row(name: str, report: dict) -> dict:
+    """A suite's row of the summary: each face, or an empty one where its exam has no such rows (a
+    `_task` suite whose every swap is left out: exam.json says why)."""
+    return {"suite": name, "exam": report["exam"], "faces": {f: report["faces"].get(f, EMPTY) for f in FACES}}
+
+
+def _short(face: dict) -> str:
+    return f"{face['rate']:.0%}" if face["n"] else "— (no rows)"
 
 
 def _cell(face: dict) -> str:
@@ -154,10 +167,11 @@ def picture(policy: str, rows: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(max(6.0, 1.1 * len(rows) + 2), 3.8))
     width = 0.8 / len(FACES)
     for i, face in enumerate(FACES):
-        rates = [r["faces"][face]["rate"] for r in rows]
+        rates = [r["faces"][face]["rate"] or 0.0 for r in rows]
         bounds = [r["faces"][face].get("ci_trials") or r["faces"][face]["ci"] for r in rows]
-        below = [max(0.0, v - lo) for v, (lo, _) in zip(rates, bounds)]
-        errors = [below, [max(0.0, hi - v) for v, (_, hi) in zip(rates, bounds)]]
+        shown = [r["faces"][face]["n"] > 0 for r in rows]
+        below = [max(0.0, v - lo) * s for v, (lo, _), s in zip(rates, bounds, shown)]
+        errors = [below, [max(0.0, hi - v) * s for v, (_, hi), s in zip(rates, bounds, shown)]]
         ax.bar(np.arange(len(rows)) + (i - (len(FACES) - 1) / 2) * width, rates, width, yerr=errors, capsize=1.5,
                label=face.replace("_", " "))  # fmt: skip
     ax.set_xticks(np.arange(len(rows)), [r["suite"].removeprefix("libero_") for r in rows], rotation=30, ha="right", fontsize=8)
