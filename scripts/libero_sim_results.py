@@ -135,6 +135,14 @@ def look_lines(decided: dict) -> list[str]:
         "own simulator on the canonical exam (LIBERO's frames, not ours). *full − fast* is paired: the same",
         "states, trials resampled for both takes at once.",
         "",
+        "```",
+        "python -m gen referent=libero_object n=300 seed=0 image_size=128 look=full out=runs/look/data/deconfounded-full",
+        "python -m train dataset=runs/look/data/deconfounded-full policy=tiny finetune=lora lora.rank=16 steps=4500 \\",
+        "    decay=1500 lr_floor=0.05 keep_every=0 point_weight=1.0 out=runs/look/ckpt/full-lora",
+        "python -m eval policy=ckpt:runs/look/ckpt/full-lora exam=runs/agree/canonical sim=libero replan=5 \\",
+        "    out=runs/agree/reports/canonical/full-libero",
+        "```",
+        "",
         "| face | fast look | full look | full − fast (95%, paired) |",
         "|---|---|---|---|",
     ]
@@ -142,6 +150,13 @@ def look_lines(decided: dict) -> list[str]:
         d = v["full_minus_fast"]
         lo, hi = d["ci_trials"]
         lines.append(f"| {face} | {_rate(v['fast'])} | {_rate(v['full'])} | {d['difference']:+.0%} ({lo:+.0%} to {hi:+.0%}) |")
+    lower = [f for f in DECIDING if decided["faces"][f]["full_minus_fast"]["ci_trials"][1] < 0]
+    if lower:
+        lines += [
+            "",
+            f"The full-look checkpoint is lower than the fast-look one beyond the paired interval on {', '.join(lower)}",
+            "(one training run each, so the difference holds training variance as well as the look).",
+        ]
     if decided["fast_costs"]:
         said = ", ".join(decided["fast_costs"])
         lines += [
