@@ -101,11 +101,12 @@ def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
 def switch_step(scene: Scene, ik: ArmIK, referent: Referent, spec: EpisodeSpec, state: list[float]) -> int | None:
     """Where a switch row changes its instruction: the step at which the oracle, doing the trial's
     own task from where its rollouts start (the initial state, the profile's settle steps), brings
-    the hand within SWITCH_DISTANCE of the original target (oracle/episode.py approach_step)."""
+    the hand within SWITCH_DISTANCE of the original target (oracle/episode.py approach_step). None
+    (no switch row) where it never comes so near, or starts there: no course to switch in mid-way."""
     from oracle.episode import approach_step, demonstrate
 
     demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), spec.sim.layout.settle_steps)
-    return approach_step(scene, demo, exam.SWITCH_DISTANCE)
+    return approach_step(scene, demo, exam.SWITCH_DISTANCE) or None
 
 
 def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:

@@ -147,4 +147,6 @@ def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> 
         exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False
     )
     obeyed = report["faces"]["obeyed_name"]
-    assert obeyed["chance"] == 0.5 and obeyed["ci"][0] <= 0.5 <= obeyed["ci"][1]
+    # chance counts every object a hand can land on (two bowls, the cookie box, the ramekin); the
+    # shortcut goes to a bowl, so it obeys a swap as a blind pick between the two bowls does
+    assert obeyed["chance"] == 0.25 and obeyed["ci"][0] <= 0.5 <= obeyed["ci"][1]

@@ -53,7 +53,10 @@ def test_exam_format_reads_without_our_code(small_exam: Path) -> None:
     assert meta["trials"] == 6 and meta["rollouts"] == len(trials)
     for _, t in trials.groupby("trial"):
         alternatives = json.loads(t["alternatives"].iloc[0])
-        assert sorted(t["face"]) == sorted(["task", "occ", "nonsense"] + ["swap"] * (len(alternatives) - 1))
+        switched = list(t["face"]).count("switch")  # one a trial, none where the hand starts within reach
+        assert switched <= 1
+        faces = ["task", "occ", "nonsense"] + ["swap"] * (len(alternatives) - 1) + ["switch"] * switched
+        assert sorted(t["face"]) == sorted(faces)
         swaps = t[t.face == "swap"]
         assert {(r.target, r.program) for r in swaps.itertuples()} == {(a["target"], a["program"]) for a in alternatives[1:]}
         assert (t[t.face == "nonsense"].instruction == "xxx").all() and t[t.face == "occ"].occluded.all()

@@ -24,7 +24,8 @@ REPORT = ("report.json", "rollouts.parquet")
 @pytest.fixture(scope="module")
 def exam(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """3 trials, 18 rollouts."""
-    return make_dataset(tmp_path_factory.mktemp("exam") / "exam", "n=3", "split=exam", "seed=1", "image_size=32", "workers=1")
+    folder = tmp_path_factory.mktemp("exam") / "exam"
+    return make_dataset(folder, "n=3", "split=exam", "seed=1", "image_size=32", "workers=1", "switches=0")
 
 
 def _eval(*args: str) -> int:
