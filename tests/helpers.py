@@ -231,3 +231,17 @@ def visible_bodies(scene: Scene, camera: str, size: int = 128) -> dict[int, int]
     image = body_image(scene, camera, size)
     bodies, counts = np.unique(image[image >= 0], return_counts=True)
     return dict(zip(bodies.tolist(), counts.tolist()))
+
+
+# Runs `python -m <module> <args>` with Ctrl-C delivered as a terminal delivers it (a test runner's
+# worker may ignore SIGINT, and a child inherits that), set in the child itself: a preexec_fn would
+# make subprocess fork the whole worker, which a worker holding gigabytes can fail to (ENOMEM).
+_WITH_SIGINT = (
+    "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    "sys.argv = sys.argv[1:]; runpy.run_module(sys.argv[0], run_name='__main__', alter_sys=True)"
+)
+
+
+def interruptible(module: str, *args: str) -> list[str]:
+    """The command line of `python -m module args` that Ctrl-C interrupts."""
+    return [sys.executable, "-c", _WITH_SIGINT, module, *args]

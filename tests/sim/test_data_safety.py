@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -15,7 +14,7 @@ import pytest
 
 from eval.__main__ import EvalOptions, evaluate
 from eval.registry import make, register
-from helpers import make_dataset
+from helpers import interruptible, make_dataset
 from jobs.cli import main
 
 REPORT = ("report.json", "rollouts.parquet")
@@ -74,14 +73,9 @@ def test_an_unusable_out_is_refused_before_the_policy_loads(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
 
 
-def _default_sigint() -> None:
-    """Ctrl-C as a terminal delivers it: a test runner's worker may ignore SIGINT, and a child inherits that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def _eval_process(*args: str) -> subprocess.Popen[str]:
-    argv = [sys.executable, "-m", "eval", "policy=oracle", *args]
-    return subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
+    argv = interruptible("eval", "policy=oracle", *args)
+    return subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 def test_ctrl_c_keeps_the_finished_rollouts_and_resume_gives_the_uninterrupted_report(exam: Path, tmp_path: Path) -> None:
@@ -119,11 +113,9 @@ def test_ctrl_c_while_the_shortcut_baseline_is_measured_keeps_its_rollouts_too(e
     interrupted then, the line says so and how many of its rollouts are kept, and resume=true goes on
     from them to the report."""
     env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
-    argv = [sys.executable, "-m", "eval", "policy=nothing", f"exam={exam}", f"out={tmp_path / 'nothing'}", "workers=1"]
+    argv = interruptible("eval", "policy=nothing", f"exam={exam}", f"out={tmp_path / 'nothing'}", "workers=1")
     kept = tmp_path / ".nothing.partial" / "baseline" / ".position.partial" / "rollouts"
-    taking = subprocess.Popen(
-        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, preexec_fn=_default_sigint
-    )
+    taking = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 180
     while len(list(kept.glob("*.pkl"))) < 2 and taking.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)

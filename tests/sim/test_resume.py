@@ -20,6 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from core import parquet
+from helpers import interruptible
 
 ARGS = ("n=3", "image_size=32", "seed=5")
 FILES = (
@@ -224,15 +225,9 @@ def test_ctrl_c_says_what_is_kept_and_that_resume_continues(clean: Path, tmp_pat
     resume=true continues (it said nothing was written, as if the work were lost); resume then gives
     the uninterrupted bytes."""
     out = tmp_path / "ds"
-    argv = [sys.executable, "-m", "gen", *ARGS, "workers=1", f"out={out}"]
+    argv = interruptible("gen", *ARGS, "workers=1", f"out={out}")
     kept = tmp_path / ".ds.partial" / "episodes"
-    running = subprocess.Popen(
-        argv,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    running = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while len(list(kept.glob("*.pkl"))) < 1 and running.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)
