@@ -131,7 +131,8 @@ def test_every_covered_suites_initial_states_load_and_its_tasks_are_recorded(tmp
     covered = _covered()
     assert len(covered) >= 20, covered
     for name in covered:
-        build(CanonicalOptions(suite=name, states=1, image_size=32, out=str(tmp_path / name)))
+        options = CanonicalOptions(suite=name, states=1, image_size=32, out=str(tmp_path / name), switches=0)  # no oracle runs
+        build(options)
         meta = read(tmp_path / name).meta["canonical"]
         assert meta["suite"] == name and set(meta["tasks"]) == set(meta["states"])
         for task, record in meta["tasks"].items():
@@ -152,7 +153,8 @@ def test_a_task_whose_fixtures_the_suite_moves_is_left_out_saying_so() -> None:
 def test_no_swap_names_an_object_the_suite_parked_off_the_scene(tmp_path: Path) -> None:
     """LIBERO-PRO's shifted layouts park a grocery metres away (x = 10 m in libero_object_temp_x0.3):
     no policy could fetch it, so no swap row names it."""
-    build(CanonicalOptions(suite="libero_object_temp_x0.3", states=1, image_size=32, out=str(tmp_path / "e"), tasks=3))
+    suite = "libero_object_temp_x0.3"
+    build(CanonicalOptions(suite=suite, states=1, image_size=32, out=str(tmp_path / "e"), tasks=3, switches=0))
     trials = read(tmp_path / "e").trials
     parked = 0
     for _, row in trials[trials["face"] == "swap"].iterrows():
@@ -183,7 +185,7 @@ def test_the_same_pictures_and_poses_as_liberos_own_render_of_the_suite(name: st
 def test_the_oracle_does_the_perturbed_tasks_and_obeys_their_swaps(name: str, tmp_path: Path) -> None:
     """On the suite's own states (the first state of its first two tasks here; the figures in docs/:
     every covered suite, 5 states a task) the oracle does every task row and obeys every swap."""
-    build(CanonicalOptions(suite=name, states=1, image_size=32, out=str(tmp_path / name), tasks=2))
+    build(CanonicalOptions(suite=name, states=1, image_size=32, out=str(tmp_path / name), tasks=2, switches=0))
     exam = read(tmp_path / name)
     rows = exam.trials[~exam.trials["occluded"]]
     faces = take(exam, rows, make("oracle"), tmp_path / "oracle", 2, "oracle", baseline=False)[0]["faces"]

@@ -163,7 +163,7 @@ def test_the_named_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: 
     the salad dressing in region 1), `named_place` obeys the rename to salad dressing (its own region),
     takes the soup for milk and butter (region-0 groceries) and the salad dressing for cream cheese
     and tomato sauce; `swaps_obeyed` reads the same swaps row by row."""
-    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical")))
+    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical"), switches=0))
     exam = read(tmp_path / "canonical")
     first = exam.trials[exam.trials["trial"] == 0]
     assert "alphabet soup" in first[first["face"] == "task"]["instruction"].iloc[0]
