@@ -81,11 +81,11 @@ def blind(runs: Path, rows: list[dict]) -> dict | None:
     """`named_place`'s faces on the canonical exam, and each canonical take's obeyed name on the
     swaps `named_place` does not obey (the blind signature: a checkpoint that reads a name as a
     place obeys little beyond it), where its take exists."""
-    logs = runs / "reports" / BLIND / ROLLOUTS
-    if not logs.is_file():
+    path = runs / "reports" / BLIND / ROLLOUTS
+    if not path.is_file():
         return None
-    exam = read(runs / "canonical")
-    shortcut = swaps_obeyed(exam, read_logs(logs)[0])
+    exam, logs = read(runs / "canonical"), read_logs(path)[0]
+    shortcut = swaps_obeyed(exam, logs)
     trial = dict(zip(exam.trials["row"].astype(int), exam.trials["trial"].astype(int)))
     beyond = {}
     for row in rows:
@@ -95,7 +95,7 @@ def blind(runs: Path, rows: list[dict]) -> dict | None:
             obeyed = swaps_obeyed(exam, read_logs(runs / "reports" / take / ROLLOUTS)[0])
             kept = [r for r in obeyed if r in shortcut and not shortcut[r]]
             beyond[take] = clustered_rate([float(obeyed[r]) for r in kept], [trial[r] for r in kept])
-    faces = score(exam, read_logs(logs)[0], "named_place")["faces"]
+    faces = score(exam, logs, "named_place")["faces"]
     return {"faces": faces, "obeyed_beyond_named_place": beyond}
 
 
