@@ -34,8 +34,9 @@ class Kind:
     """A buildable object.
 
     `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
-    arguments (`libero`: LIBERO's model file `params["xml"]`; `site`: a place on a fixture, the
-    fixture's site `params["site"]`, which no scene moves; core/libero.py); `size` is
+    arguments (`libero`: LIBERO's model file `params["xml"]`; `site`: a place on a fixture, which no
+    scene moves: the fixture's site `params["site"]`, or the point `params["offset"]` in the frame of
+    its body `params["body"]`, carried along as the body moves (a drawer, a knob); core/libero.py); `size` is
     the extent (x, y, z) in the object's resting frame (its model frame turned by `quat`),
     `bottom` the height of its lowest point below the body origin, and `grasp_axis` the
     resting-frame axis ("x" or "y") the fingers close along: the narrower one. Colorable kinds
@@ -64,6 +65,14 @@ class Kind:
         """A place on a fixture (a stove's burner), which no scene moves: an object of the scene only
         as somewhere to put things."""
         return self.model == SITE
+
+    @property
+    def anchor(self) -> str:
+        """Where a place on a fixture is, as another simulator is asked to follow it: its site's
+        name, or `<body>@<x>,<y>,<z>` (eval/libero_server.py reads both)."""
+        if "site" in self.params:
+            return str(self.params["site"])
+        return f"{self.params['body']}@{','.join(map(str, self.params['offset']))}"
 
     @property
     def noun(self) -> str:

@@ -26,5 +26,14 @@ class Skills(Protocol):
     def push(self, object_id: str) -> None:
         """Slide the object along the table, away from the robot."""
 
+    def push_to(self, object_id: str, region_id: str) -> None:
+        """Slide a dish along the table into a region (LIBERO-Goal's "push the plate to ...")."""
+
+    def turn_on(self, knob_id: str) -> None:
+        """Take a knob and turn it the way it turns on."""
+
+    def pull_open(self, drawer_id: str, travel: float = ...) -> None:
+        """Take a drawer's handle and pull the drawer `travel` out."""
+
 
 DemoScript = Callable[[Skills, EpisodeSpec], None]  # a demonstration, written over the skills: `demo(skills, spec)`

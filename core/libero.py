@@ -49,6 +49,31 @@ def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface:
     return Kind(name, SITE, (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
 
 
+DRAWER_REGION = (0.10224, 0.07561, 0.02993)  # LIBERO's cabinet drawer regions' half size, as they stand in the world
+DRAWER_HANDLE = (-0.00606, -0.11289)  # a drawer's handle bar from its region's site, in the drawer's frame (wooden_cabinet.xml)
+# how far out from a closed drawer's site the cabinet's top ends, and the inner face of the drawer's front
+DRAWER_OPENING = (0.0893, 0.0838)
+KNOB_RADIUS = 0.03  # how far from the stove knob's axis the point that stands for it is
+
+
+def _drawer(name: str, site: str, floor: float, handle: float, roll: float = 0.0) -> Kind:
+    """A cabinet drawer as a place (model `site`): LIBERO's region site inside it, things resting on
+    its floor `floor` below the site's centre, `In` it its box (the floor lowered 1 cm, as LIBERO's
+    `in_box` lowers it: core/success.py). Its handle bar is `handle` below the site's centre and
+    DRAWER_HANDLE in front of it (the drawer's own frame, as `pull`, the way it slides out; the
+    uncovered part of it open lies between DRAWER_OPENING's two faces); `roll`:
+    how far the hand taking it turns from closing straight up and down (oracle/skills.py pull_open)."""
+    kind = _on_fixture(name, site, DRAWER_REGION, floor, 0.05)
+    params = {
+        **kind.params,
+        "handle": (*DRAWER_HANDLE, -handle),
+        "pull": (0.0, -1.0, 0.0),
+        "roll": roll,
+        "opening": DRAWER_OPENING,
+    }
+    return replace(kind, contain=((0.0, 0.0, 0.0), DRAWER_REGION), params=params)
+
+
 def _hope(
     name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], grasp: str = "y", faces: int = 2000
 ) -> Kind:
@@ -99,6 +124,33 @@ KINDS: dict[str, Kind] = {
         # the site) and the cabinet's top
         _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
         _on_fixture("cabinet_top", "wooden_cabinet_1_top_side", (0.12534, 0.09438, 0.00147), 0.0015, 0.09),
+        # LIBERO-Goal's cabinet drawers, each the region site inside it (which moves with the drawer):
+        # things rest on the drawer's floor, below the site; LIBERO's `In(x, <drawer region>)` is x's
+        # origin in the site's box (a quarter turn about y makes its half size these, in the world)
+        _drawer("top_drawer", "wooden_cabinet_1_top_region", -0.0266, 0.0017),
+        # the middle drawer's handle is 11 cm over the table: a hand closing straight up and down on it
+        # would sweep its palm (20 cm along the fingers' closing axis) through a plate standing before it
+        _drawer("middle_drawer", "wooden_cabinet_1_middle_region", -0.0275, 0.0065, roll=float(np.pi / 4)),
+        # the stove's knob: a point on it 3 cm from its axis (LIBERO's model has no site on it), which
+        # a turn of the knob carries along an arc
+        Kind(
+            "stove_knob",
+            SITE,
+            (0.068, 0.068, 0.05),
+            0.0,
+            params={"body": "flat_stove_1_button", "offset": (0.0, KNOB_RADIUS, 0.0), "goal_name": "flat_stove_1"},
+        ),
+        # the table's region in front of the stove (LIBERO-Goal's `main_table_stove_front_region`, a
+        # site LIBERO adds to its table body): LIBERO's `On(x, region)` is x's origin over its box,
+        # from 2 mm to 10.7 cm above its centre
+        Kind(
+            "stove_front",
+            SITE,
+            (0.08, 0.08, 0.0),
+            0.0,
+            params={"body": "table", "offset": (-0.05, 0.21, 0.02), "goal_name": "main_table_stove_front_region"},
+            contain=((0.0, 0.0, 0.0545), (0.04, 0.04, 0.0525)),
+        ),  # fmt: skip
         # LIBERO-Goal's bottle (turbosquid_objects), standing
         Kind(
             "wine_bottle",
@@ -177,6 +229,24 @@ FIXTURES: dict[str, Fixture] = {
         Fixture("wine_rack", "turbosquid_objects/wine_rack/wine_rack.xml"),
     )
 }
+
+
+# Our programs (core/success.py) as LIBERO's goal predicates: `goal(program, place, moved)`
+GOALS = {"open": ("Open",), "turn_on": ("Turnon",), "place_in": ("In",), "push_to": ("On",)}
+
+
+def goal(program: str, place: str, moved: str | None = None) -> list[str]:
+    """LIBERO's goal predicate (BDDL words) of doing `program` at `place` (LIBERO's name of it: a
+    site, a fixture, an object instance), moving `moved`: what its `check_success()` is asked.
+    Carrying is `On` the place."""
+    (predicate,) = GOALS.get(program, ("On",))
+    return [predicate, place] if moved is None else [predicate, moved, place]
+
+
+def place_name(kind: Kind, name: str) -> str:
+    """LIBERO's name of a place in its goals: a point of a fixture's its `goal_name`, else `name`
+    (the site's, or the object instance's)."""
+    return str(kind.params.get("goal_name", name))
 
 
 def instance(kind: str, i: int) -> str:

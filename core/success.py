@@ -15,6 +15,15 @@ scorer judges logged rollouts with the same predicates.
           goals use it): its origin within 3 cm of the destination's (horizontally) and not below
           it, and resting on it (its bottom at most 2 cm above the destination's top: positions
           stand in for LIBERO's contact test).
+* open  — the target (a drawer, its place inside it) slid out at least OPEN_TRAVEL: LIBERO's `Open`
+          of a cabinet drawer, its joint past -0.14 m (LIBERO's drawers all start closed).
+* turn_on — the target (a point on the stove's knob) was carried along an arc of at least TURN_ON
+          radians about the knob's axis: LIBERO's `TurnOn` of the stove, its knob's joint at 0.5 rad
+          or more (it starts at 0 and turns one way only).
+* place_in — the carried object (`params.object`) ends in the target place's `contain` box, its
+          floor lowered 1 cm: LIBERO's `In(object, <drawer region>)`.
+* push_to — the object (`params.object`) ends over the target region (its `contain` box): LIBERO's
+          `On(object, <table region>)`, as "push the plate to the front of the stove" asks.
 """
 
 from __future__ import annotations
@@ -32,6 +41,8 @@ SLIDE_MAX_RISE = 0.02
 PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
 CONTAIN_FLOOR = 0.01  # LIBERO's `in_box` lowers the container box's floor by this much
 ON_RADIUS = 0.03  # LIBERO's `check_ontop`: origins this close horizontally
+OPEN_TRAVEL = 0.14  # LIBERO's wooden cabinet: a drawer is open past this far out (its joint below -0.14)
+TURN_ON = 0.5  # LIBERO's flat stove: on from this knob angle (radians)
 
 
 @dataclass(frozen=True)
@@ -73,16 +84,41 @@ def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     return inside and resting and dest_still
 
 
-def contained(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
-    """LIBERO's `In(target, <container>_contain_region)`: the target's origin inside the box,
-    whose floor LIBERO lowers by 1 cm (envs/objects/site_object.py `in_box`)."""
-    container = spec.task.params["destination"]
+def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, floor: float) -> bool:
+    """Whether `thing`'s origin ends in `container`'s `contain` box, its floor lowered by `floor`."""
     kind = worlds.kind(spec.object(container).kind, spec.sim.world)
     if kind.contain is None:
         raise ValueError(f"{kind.name} is not a container (no contain box)")
     offset, half = (np.asarray(v) for v in kind.contain)
-    d = np.asarray(outcome.end[target]) - (np.asarray(outcome.end[container]) + offset)
-    return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - CONTAIN_FLOOR < d[2] < half[2])
+    d = np.asarray(outcome.end[thing]) - (np.asarray(outcome.end[container]) + offset)
+    return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - floor < d[2] < half[2])
+
+
+def contained(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
+    """LIBERO's `In(target, <container>_contain_region)`: the target's origin inside the box,
+    whose floor LIBERO lowers by 1 cm (envs/objects/site_object.py `in_box`)."""
+    return _in_box(spec, outcome, target, spec.task.params["destination"], CONTAIN_FLOOR)
+
+
+def put_in(spec: EpisodeSpec, outcome: Outcome, place: str) -> bool:
+    """LIBERO's `In(<carried object>, <place>)`, the place the target (a drawer's region)."""
+    return _in_box(spec, outcome, spec.task.params["object"], place, CONTAIN_FLOOR)
+
+
+def pushed_to(spec: EpisodeSpec, outcome: Outcome, region: str) -> bool:
+    """LIBERO's `On(<object>, <table region>)` (site_object.py `under`): the object's origin over the region."""
+    return _in_box(spec, outcome, spec.task.params["object"], region, 0.0)
+
+
+def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
+    return float(np.linalg.norm(np.subtract(outcome.end[drawer], outcome.start[drawer]))) >= OPEN_TRAVEL
+
+
+def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:
+    """A point `radius` from the axis, turned by an angle a, moves 2 radius sin(a / 2): the chord."""
+    radius = float(np.hypot(*worlds.kind(spec.object(knob).kind, spec.sim.world).params["offset"][:2]))
+    chord = float(np.linalg.norm(np.subtract(outcome.end[knob], outcome.start[knob])))
+    return chord >= 2 * radius * np.sin(TURN_ON / 2)
 
 
 def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
@@ -96,7 +132,22 @@ def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
     return near and t_end[2] >= d_end[2] and resting
 
 
-PREDICATES = {"pick": lifted, "push": pushed, "place": placed, "pick_place": contained, "pick_place_on": on}
+# Programs whose target is a place (what the instruction names is where, or what on the furniture,
+# not what the hand lands on): those that bring `params.object` there, and the furniture's motions
+BRINGS = ("place", "place_in", "push_to")
+MOTIONS = ("open", "turn_on")
+
+PREDICATES = {
+    "pick": lifted,
+    "push": pushed,
+    "place": placed,
+    "pick_place": contained,
+    "pick_place_on": on,
+    "open": opened,
+    "turn_on": turned_on,
+    "place_in": put_in,
+    "push_to": pushed_to,
+}
 
 
 def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:

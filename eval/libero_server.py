@@ -13,15 +13,16 @@ exchange pickles. LIBERO's own prints go to stderr. Requests:
   `size` px are then drawn with LIBERO's settings by `sim.render`, what its camera observations
   call), and soft resets (the compiled model kept: LIBERO's hard reset would rebuild it and its
   renderer, seconds each).
-* `reset` {seed, state | pose, objects, sites}: `np.random` seeded (LIBERO draws its fixtures' poses
-  at reset), `reset()`, then LIBERO's own initial-state vector (`set_init_state`) or a pose from a
+* `reset` {seed, state | pose, objects, sites, fixtures}: `np.random` seeded (LIBERO draws its
+  fixtures' poses at reset), `reset()`, then LIBERO's own initial-state vector (`set_init_state`),
+  the fixtures standing where `fixtures` says (where the exam's scene stands them), or a pose from a
   scene record (`pose_from_record`); `objects` and `sites` name what the log follows.
 * `step` {action}: one `env.step` (a control step of OSC_POSE at 20 Hz).
 * `render`: the cameras' frames, LIBERO's raw ones (upside down, as its renderer gives them).
 * `goal` {predicates}: LIBERO's own predicates (`_eval_predicate`) now, and `check_success()`.
 Every `reset` and `step` answers with what is needed to log and observe the rollout: the grip
 site's position, the hand's quaternion (wxyz), the finger joints, each followed object's and
-site's position.
+site's position (or point on a body: `anchored`).
 """
 
 from __future__ import annotations
@@ -150,15 +151,21 @@ def table_bddl(suite: str, objects: dict[str, str], goal: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def stand_fixtures(env: Any, fixtures: list[list]) -> None:
+    """Stand the fixtures ([name, x, y, z, qw, qx, qy, qz]) where given, not where LIBERO's reset drew them."""
+    model = env.sim.model
+    for name, *where in fixtures:
+        body = model.body_name2id(env.env.fixtures_dict[name].root_body)
+        model.body_pos[body], model.body_quat[body] = where[:3], where[3:]
+
+
 def pose_from_record(env: Any, pose: dict) -> dict:
     """Set LIBERO's environment to a scene record's initial state: the fixtures where `pose["fixtures"]`
     ([name, x, y, z, qw, qx, qy, qz]) stands them, the robot's joints (`arm`, `fingers`), each object
     of `pose["objects"]` ({instance, pos, quat}) at its pose and every other object of the problem
     parked out of reach; returns the observation there."""
     model = env.sim.model
-    for name, *where in pose.get("fixtures", []):
-        body = model.body_name2id(env.env.fixtures_dict[name].root_body)
-        model.body_pos[body], model.body_quat[body] = where[:3], where[3:]
+    stand_fixtures(env, pose.get("fixtures", []))
     qpos = np.array(env.sim.data.qpos)
     for j, value in enumerate([*pose["arm"], *pose["fingers"]]):
         qpos[model.get_joint_qpos_addr(model.joint_id2name(j))] = value
@@ -238,7 +245,8 @@ class Server:
     def reset(self, request: dict, arrays: dict) -> tuple[dict, dict]:
         np.random.seed(request["seed"])
         self.env.reset()
-        if "state" in arrays:
+        if "state" in arrays:  # LIBERO's own initial state, its fixtures where the exam stands them
+            stand_fixtures(self.env, request.get("fixtures", []))
             self.env.set_init_state(arrays["state"])
         else:
             pose_from_record(self.env, request["pose"])
@@ -275,10 +283,20 @@ class Server:
             "fingers": np.array(data.qpos[fingers]),
             "objects": np.array(
                 [data.body_xpos[model.body_name2id(self.env.env.objects_dict[o].root_body)] for o in objects]
-                + [data.site_xpos[model.site_name2id(s)] for s in sites]
+                + [anchored(model, data, s) for s in sites]
             ).reshape(-1, 3),
         }
         return {}, out
+
+
+def anchored(model: Any, data: Any, anchor: str) -> np.ndarray:
+    """Where a place is: a site's position, or for `<body>@<x>,<y>,<z>` that point of the body's frame
+    (a point on the stove's knob, which LIBERO's model marks with no site)."""
+    if "@" not in anchor:
+        return np.array(data.site_xpos[model.site_name2id(anchor)])
+    body, offset = anchor.split("@")
+    b = model.body_name2id(body)
+    return data.body_xpos[b] + data.body_xmat[b].reshape(3, 3) @ np.array([float(v) for v in offset.split(",")])
 
 
 def serve(stdin: IO[bytes], stdout: IO[bytes]) -> None:

@@ -74,7 +74,7 @@ def check(exam: Exam, policy: str) -> None:
     if key in PRIVILEGED:
         raise SimUnavailable(
             f"policy {key} reads our simulator's state and plans, not observations: it takes exams in our simulator only "
-            f"(leave sim= out); sim=libero takes policies that act on observations ({', '.join(_observing())})"
+            f"(leave sim= out); sim=libero takes policies that act on observations ({_observing()})"
         )
     if not PYTHON.is_file():
         raise SimUnavailable(f"LIBERO's environment is not installed ({PYTHON} is missing): make setup builds it")
@@ -94,11 +94,11 @@ class Setup:
 
     key: str
     bddl: dict
-    start: dict
+    start: dict  # the pose from the scene record; with LIBERO's own state, where its fixtures stand
     state: np.ndarray | None
     ids: tuple[str, ...]
     objects: tuple[str, ...]  # LIBERO instance of each of ids[: len(objects)]
-    sites: tuple[str, ...]  # LIBERO site of each of the rest
+    sites: tuple[str, ...]  # LIBERO site (or point on a body: Kind.anchor) of each of the rest
 
 
 class Rows:
@@ -124,7 +124,7 @@ class Rows:
         else:
             names = [o["instance"] for o in spec.scene_record()["objects"]]
         placed = [(o.id, name) for o, name in zip(spec.objects, names) if not self._site(o.kind)]
-        sites = [(o.id, self.world.kind(o.kind).params["site"]) for o in spec.objects if self._site(o.kind)]
+        sites = [(o.id, self.world.kind(o.kind).anchor) for o in spec.objects if self._site(o.kind)]
         return tuple(i for i, _ in placed + sites), tuple(n for _, n in placed), tuple(n for _, n in sites)
 
     def setup(self, spec: EpisodeSpec) -> Setup:
@@ -132,7 +132,10 @@ class Rows:
         if self.suite:
             task, state = self.cases[spec.index]
             bddl = {"bddl": str(libero.benchmark_root() / "bddl_files" / self.suite / f"{task}.bddl")}
-            return Setup(f"{self.suite}/{task}", bddl, {}, libero.initial_states(self.suite, task)[state], ids, objects, sites)
+            fixtures = {"fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in spec.scene_record()["fixtures"]]}
+            return Setup(
+                f"{self.suite}/{task}", bddl, fixtures, libero.initial_states(self.suite, task)[state], ids, objects, sites
+            )
         record = spec.scene_record()
         pose = {
             "arm": record["robot"]["arm"],
@@ -157,16 +160,19 @@ class Rows:
 
 
 def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> list[str] | None:
-    """LIBERO's goal predicate of a row's ask (carry what the program moves to where it goes), or None
-    where LIBERO has no predicate for the program."""
+    """LIBERO's goal predicate of a row's ask (carry what the program moves to where it goes; a
+    motion of the furniture), or None where LIBERO has no predicate for the program."""
     params = spec.task.params
+    where = dict(zip(setup.ids, (*setup.objects, *setup.sites)))
+    if program in libero.GOALS:
+        place = libero.place_name(worlds.kind(spec.object(target).kind, spec.sim.world), where[target])
+        return libero.goal(program, place, where[params["object"]] if "object" in params else None)
     if "object" in params:
         moved, destination = params["object"], target
     elif "destination" in params:
         moved, destination = target, params["destination"]
     else:
         return None
-    where = dict(zip(setup.ids, (*setup.objects, *setup.sites)))
     kind = worlds.kind(spec.object(destination).kind, spec.sim.world)
     if kind.contain is not None:
         return ["In", where[moved], f"{where[destination]}_contain_region"]
@@ -220,7 +226,7 @@ class LiberoSim:
             self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "cameras": cameras, **setup.bddl})
             self._key = setup.key
         arrays = {"state": setup.state} if setup.state is not None else {}
-        start = {"pose": setup.start} if setup.state is None else {}
+        start = {"pose": setup.start} if setup.state is None else setup.start
         request = {"op": "reset", "seed": int(row["trial"]), "objects": setup.objects, "sites": setup.sites, **start}
         _, self._now = self._ask(request, arrays)
         self.setup, self.spec = setup, spec

@@ -73,7 +73,7 @@ from core import contact, worlds
 from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, ExamError, decode_objects, read
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
-from core.success import Outcome, achieved
+from core.success import BRINGS, MOTIONS, Outcome, achieved
 from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline
 from jobs.cli import UserError, main
 
@@ -95,7 +95,7 @@ def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: 
     the object's grasp point (a bowl's: its rim) or the release point over a destination, the
     places the oracle's skills go to (core/contact.py)."""
     kind = worlds.kind(spec.object(target).kind, spec.sim.world)
-    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if program == "place" else None
+    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if program in BRINGS else None
     return contact.distance(kind, objects[target], ee, carried)
 
 
@@ -117,11 +117,11 @@ def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndar
 
 def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tuple[str, str]]:
     """The other objects of the scene a hand can land on when the program acts on the named object
-    (not where a `place` carries it): every object but places on furniture, what the program
+    (not where a program brings something, nor a motion of the furniture): every object but places on furniture, what the program
     carries something into, and the alternatives'. A landing there is a distractor's, and chance
     is one over the alternatives and these together."""
     program = alternatives[0][1]
-    if program == "place":
+    if program in BRINGS + MOTIONS:
         return []
     params, named = spec.task.params, {target for target, _ in alternatives}
     kept = {params.get("destination"), params.get("object"), *named}

@@ -15,9 +15,14 @@ from oracle.motion import Motion
 # the closing axis and this far across it, its tip this far below the grip site.
 FINGER_REACH, FINGER_HALF_WIDTH, FINGER_TIP = (0.039, 0.066), 0.011, 0.0095
 FINGER_MARGIN = 0.005  # how far above whatever stands beside a bowl the outer fingertip stays
+# the hand's palm (its collision hull, measured): half its length along the closing axis and its
+# width across, and how far above the grip site its underside is
+PALM_HALF, PALM_OVER_GRIP = (0.104, 0.032), 0.031
 CARRY_MARGIN = 0.03  # how far the hand, and what it carries, passes from the objects standing in the scene (m)
 RELEASE_TURNS = np.radians([0.0, 45.0, -45.0, 90.0, -90.0])  # how far the hand may turn what it carries before lowering it
-RIM_SIDES = np.radians([0.0, 30.0, -30.0, 60.0, -60.0])  # where on a bowl's wall to grasp, from the robot-facing side
+RIM_SIDES = np.radians(
+    [0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0]
+)  # where on a bowl's wall to grasp, from the robot-facing side
 
 
 class Clearance(Motion):
@@ -45,16 +50,25 @@ class Clearance(Motion):
     def _rim_side(self, kind: catalog.Kind, pos: np.ndarray, top: float) -> float:
         """Which side of a bowl's wall to grasp (the direction from its centre): the first, from
         the one facing the robot's base, under whose outer finger nothing (a neighbour, a stove)
-        stands higher than the fingertip comes at the grasp depth; if none is clear (a bowl in a
+        stands higher than the fingertip comes at the grasp depth, and over whose hand nothing
+        (an open drawer) hangs lower than it comes down from; if none is clear (a bowl in a
         drawer), the facing side."""
         toward = np.subtract(self.scene.world.robot_base[:2], pos[:2])
         facing = float(np.arctan2(toward[1], toward[0]))
         above, lowest = self.clearance(), top - kind.grasp_depth() - FINGER_TIP - FINGER_MARGIN
+        palm = top - kind.grasp_depth() + PALM_OVER_GRIP
         widths = (-FINGER_HALF_WIDTH, 0.0, FINGER_HALF_WIDTH)
         for side in facing + RIM_SIDES:
             radial, across = np.array([np.cos(side), np.sin(side)]), np.array([-np.sin(side), np.cos(side)])
             under = (pos[:2] + (kind.rim + r) * radial + w * across for r in FINGER_REACH for w in widths)
-            if all(self.scene.surface_below(xy, above) < lowest for xy in under):
+            hand = (
+                pos[:2] + (kind.rim + r) * radial + w * across
+                for r in np.linspace(-PALM_HALF[0], PALM_HALF[0], 5)
+                for w in (-PALM_HALF[1], 0.0, PALM_HALF[1])
+            )
+            if all(self.scene.surface_below(xy, above) < lowest for xy in under) and all(
+                self.scene.ceiling_above(xy, palm) > above for xy in hand
+            ):
                 return float(side)
         return facing
 

@@ -16,7 +16,7 @@ import numpy as np
 from core import contact
 from core.demo import DemoScript
 from core.spec import EpisodeSpec
-from core.success import Outcome, succeeded
+from core.success import BRINGS, Outcome, succeeded
 from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene
 from oracle.skills import Skills
@@ -95,7 +95,7 @@ def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
     has committed. None if it never comes so near."""
     spec = demo.spec
     kind = scene.world.kind(spec.object(spec.target).kind)
-    carried = scene.world.kind(spec.object(spec.task.params["object"]).kind) if spec.task.program == "place" else None
+    carried = scene.world.kind(spec.object(spec.task.params["object"]).kind) if spec.task.program in BRINGS else None
     for t, state in enumerate(demo.states):
         scene.set_physics_state(state)
         if float(contact.distance(kind, scene.object_pos(spec.target), scene.ee_pos(), carried)) < within:

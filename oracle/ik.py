@@ -1,4 +1,5 @@
-"""Top-down grasp poses -> arm joint angles, with mink's differential IK on the robot alone."""
+"""Grasp poses -> arm joint angles, with mink's differential IK on the robot alone: the hand
+pointing down at a yaw, or (a drawer's handle, taken from the front) at a given orientation."""
 
 from __future__ import annotations
 
@@ -11,6 +12,17 @@ from oracle.scene import EE_SITE, robot_xml
 
 # The grip site pointing straight down, fingers closing along world y (yaw 0).
 DOWN = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+def facing(direction: tuple[float, float], roll: float = 0.0) -> np.ndarray:
+    """The grip site pointing level along the horizontal `direction`, fingers closing up and down,
+    turned `roll` about that direction: how a hand takes a drawer's handle bar from the front. (The
+    columns are the grip frame's axes: closing, across, approach; closing down rather than up keeps
+    the Panda's wrist within its range.)"""
+    x, y = np.asarray(direction, float) / np.hypot(*direction)
+    down, across = np.array([0.0, 0.0, -1.0]), np.array([-y, x, 0.0])
+    c, s = np.cos(roll), np.sin(roll)
+    return np.column_stack([c * down + s * across, c * across - s * down, [x, y, 0.0]])
 
 
 class IKError(RuntimeError):
@@ -32,7 +44,8 @@ def grasp_yaw(axis_angle: float) -> float:
 
 
 class ArmIK:
-    """Solves for the arm joints that put the grip site at a position, pointing down, at a yaw.
+    """Solves for the arm joints that put the grip site at a position, pointing down at a yaw (or
+    at the orientation `facing` gives).
 
     A posture task toward the home pose keeps solutions in the same elbow-up family, so ruckig
     segments between them stay short and smooth.
@@ -55,9 +68,10 @@ class ArmIK:
         mujoco.mj_kinematics(self.model, self._fk)
         return self._fk.site_xpos[self._site].copy(), self._fk.site_xmat[self._site].reshape(3, 3).copy()
 
-    def solve(self, pos: np.ndarray, yaw: float, seed: np.ndarray) -> np.ndarray:
+    def solve(self, pos: np.ndarray, yaw: float, seed: np.ndarray, facing: np.ndarray | None = None) -> np.ndarray:
         self.config.update(np.concatenate([seed, [FINGER_OPEN, -FINGER_OPEN]]))
-        target = mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(yaw_matrix(yaw) @ DOWN), np.asarray(pos))
+        rotation = yaw_matrix(yaw) @ DOWN if facing is None else facing
+        target = mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), np.asarray(pos))
         self.frame.set_target(target)
         for _ in range(self.max_iters):
             velocity = mink.solve_ik(self.config, [self.frame, self.posture], 0.1, "quadprog", damping=1e-3)

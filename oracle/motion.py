@@ -41,6 +41,7 @@ class Motion:
         self.dt = 1.0 / spec.sim.fps
         self.q = scene.data.qpos[scene.arm_qpos].copy()  # where the arm is: the home pose, or a recorded start
         self.yaw = 0.0
+        self.facing: np.ndarray | None = None  # the hand's orientation when it does not point down (oracle/ik.py facing)
         self.gripper = OPEN
         self.actions: list[np.ndarray] = []
         self.states: list[np.ndarray] = []  # physics state before each action
@@ -79,11 +80,11 @@ class Motion:
         (default: where the arm is)."""
         start = self.q if start is None else start
         try:
-            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=start)
+            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=start, facing=self.facing)
         except IKError:
             if self.reseed is None:
                 raise
-            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=self.reseed)
+            goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=self.reseed, facing=self.facing)
         return goal, joint_path(start, goal, self.dt, self.limits)
 
     def _follow(self, goal: np.ndarray, path: list[np.ndarray], yaw: float) -> None:
@@ -92,7 +93,7 @@ class Motion:
         self.q, self.yaw = goal, yaw
 
     def move_to(self, pos: np.ndarray, yaw: float | None = None) -> None:
-        """Grip site to `pos`, pointing down, at `yaw` (default: keep the current yaw)."""
+        """Grip site to `pos`, pointing down at `yaw` (default: keep the current yaw), or as `facing` has it."""
         yaw = self.yaw if yaw is None else yaw
         self._follow(*self._path_to(pos, yaw), yaw)
 
@@ -104,7 +105,7 @@ class Motion:
         for k in range(1, steps + 1):
             tau = k / steps
             s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
-            self.q = self.ik.solve(start + s * (goal - start), self.yaw, seed=self.q)
+            self.q = self.ik.solve(start + s * (goal - start), self.yaw, seed=self.q, facing=self.facing)
             self._execute(self.q)
 
     def hold(self, steps: int) -> None:

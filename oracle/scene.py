@@ -242,6 +242,12 @@ class Body:
     park: np.ndarray  # free-joint qpos when not in the episode
     collision: tuple[tuple[int, int, int], ...]  # compiled (contype, conaffinity, group) of each geom
     site: int = -1  # a fixture's site standing in for an object (a `site` kind): never moved, never parked
+    offset: np.ndarray | None = None  # or a point on the fixture's body (a `site` kind's `offset`), in its frame
+
+    @property
+    def fixed(self) -> bool:
+        """A place on a fixture (a `site` kind): the scene never poses or parks it."""
+        return self.site >= 0 or self.offset is not None
 
 
 class Scene:
@@ -273,11 +279,12 @@ class Scene:
         index = 0
         for kind_name, count in self.assets:
             kind = self.world.kind(kind_name)
-            if kind.is_site:  # the fixture's site itself: where it is, the scene's positions read
-                site = m.site(kind.params["site"]).id
-                body_id = int(m.site_bodyid[site])
+            if kind.is_site:  # the fixture's site, or a point on its body: where it is, the scene's positions read
+                site = m.site(kind.params["site"]).id if "site" in kind.params else -1
+                body_id = int(m.site_bodyid[site]) if site >= 0 else m.body(kind.params["body"]).id
+                offset = None if site >= 0 else np.asarray(kind.params["offset"], float)
                 geoms = tuple(g for g in range(m.ngeom) if _descends(m, m.geom_bodyid[g], body_id))
-                self.bodies[kind_name] = [Body(kind, body_id, -1, geoms, np.zeros(7), (), site)]
+                self.bodies[kind_name] = [Body(kind, body_id, -1, geoms, np.zeros(7), (), site, offset)]
                 continue
             for i in range(count):
                 name = self.world.body_name(kind_name, i)
@@ -309,11 +316,11 @@ class Scene:
                 raise ValueError(f"episode {spec.index} needs another {obj.kind!r} but the scene holds {self.assets}")
             body = free[obj.kind].pop(0)
             self.placed[obj.id] = body
-            if body.site < 0:
+            if not body.fixed:
                 self._pose(body, obj)
                 self._park(body, False)
         for bodies in free.values():
-            for body in (b for b in bodies if b.site < 0):
+            for body in (b for b in bodies if not b.fixed):
                 d.qpos[body.qpos_adr : body.qpos_adr + 7] = body.park
                 self._park(body, True)
         mujoco.mj_forward(m, d)
@@ -386,8 +393,15 @@ class Scene:
         return self.data.site_xpos[self.ee_site].copy()
 
     def object_pos(self, object_id: str) -> np.ndarray:
-        body = self.placed[object_id]
-        return (self.data.site_xpos[body.site] if body.site >= 0 else self.data.xpos[body.body_id]).copy()
+        body, d = self.placed[object_id], self.data
+        if body.offset is not None:
+            return d.xpos[body.body_id] + d.xmat[body.body_id].reshape(3, 3) @ body.offset
+        return (d.site_xpos[body.site] if body.site >= 0 else d.xpos[body.body_id]).copy()
+
+    def body_pose(self, object_id: str) -> tuple[np.ndarray, np.ndarray]:
+        """The position and rotation matrix of the body an object is (or, a place, is on: a drawer, a knob)."""
+        body = self.placed[object_id].body_id
+        return self.data.xpos[body].copy(), self.data.xmat[body].reshape(3, 3).copy()
 
     def surface_below(self, xy: np.ndarray, z: float) -> float:
         """Height of the first surface straight below (x, y, z) that is not the robot's: where a
@@ -399,6 +413,19 @@ class Scene:
                 return z
             z -= 1e-4  # through the robot's geom, on down
         return -np.inf
+
+    def ceiling_above(self, xy: np.ndarray, z: float, besides: str | None = None) -> float:
+        """Height of the first surface straight above (x, y, z) that is neither the robot's nor the
+        object `besides`'s: what a thing lifted there, or a hand come down there, would meet (inf
+        under nothing)."""
+        m, geom, up = self.model, np.zeros(1, np.int32), np.array([0.0, 0.0, 1.0])
+        skip = self.placed[besides].body_id if besides is not None else -1
+        while (distance := mujoco.mj_ray(m, self.data, np.array([xy[0], xy[1], z], float), up, None, 1, skip, geom)) >= 0:
+            z += distance
+            if m.body_rootid[m.geom_bodyid[geom[0]]] != m.body_rootid[self.hand]:
+                return z
+            z += 1e-4  # through the robot's geom, on up
+        return np.inf
 
     def hand_gap(self, path: Sequence[np.ndarray], held: str | None, among: Sequence[str], within: float) -> float:
         """The smallest distance, up to `within`, between the hand with the object `held` (carried
@@ -455,7 +482,7 @@ class Scene:
     def object_yaw(self, object_id: str) -> float:
         """How far the object is turned about the world's z from its resting orientation."""
         body = self.placed[object_id]
-        if body.site >= 0:
+        if body.fixed:
             return 0.0
         mat = self.data.xmat[body.body_id].reshape(3, 3)
         if body.kind.quat != IDENTITY:

@@ -11,13 +11,25 @@ import numpy as np
 
 from core import contact
 from core.success import PUSH_DIRECTION
-from oracle.clearance import CARRY_MARGIN, Clearance
-from oracle.ik import grasp_yaw
+from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
+from oracle.ik import facing, grasp_yaw
 from oracle.motion import CLOSED
+
+KNOB_GRIP = 0.012  # how far below the top of the stove knob's ridge the fingers close on it
+KNOB_TURN = 0.9  # how far the hand turns the knob (radians): past LIBERO's 0.5, short of its 2.1 stop
+# where the hand lines up in front of a drawer's handle; how far it pulls it (the drawer stops at 16 cm)
+HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
+SWIFT_LIFT = 0.15  # the highest lift made as one time-optimal joint move
+# how far at a time, and how many times, a held object slides out from under something; how far clear of it
+UNDER_STEP, UNDER_STEPS, UNDER_MARGIN = 0.03, 5, 0.01
+# a dish dragged by its inner wall: the wall's thickness, how far behind its centre the fingers come
+# down, and how far above its bottom their tips are sent (below it: the hand presses on the floor, and holds the wall)
+DISH_WALL, DISH_SET_BACK, DISH_FLOOR = 0.023, 0.02, -0.003
 
 
 class Skills(Clearance):
-    """grasp, lift, place and push, over the scene of one episode."""
+    """grasp, lift, place, push, and the fixtures' motions (turn a knob, pull a drawer open), over
+    the scene of one episode."""
 
     def open(self, steps: int = 6) -> None:
         self.held = None
@@ -43,15 +55,39 @@ class Skills(Clearance):
         self.held = (object_id, contact.grip_height(kind))
 
     def lift(self, height: float = 0.15) -> None:
-        self.move_to(self.scene.ee_pos() + [0.0, 0.0, height])
+        """Raise the hand straight up by `height`; what it holds first slides toward the robot out
+        from under whatever hangs over it (an open drawer over a bowl)."""
+        if self.held is not None:
+            self._out_from_under(self.held[0], height)
+        if height > SWIFT_LIFT:  # straight and steady: a bowl held by its wall shakes loose on a long time-optimal rise
+            self.move_linear(self.scene.ee_pos() + [0.0, 0.0, height], speed=0.2)
+        else:
+            self.move_to(self.scene.ee_pos() + [0.0, 0.0, height])
         self.hold(2)
+
+    def _out_from_under(self, object_id: str, height: float) -> None:
+        kind = self._kind(object_id)
+        toward = np.subtract(self.scene.world.robot_base[:2], self.scene.object_pos(object_id)[:2])
+        toward /= np.linalg.norm(toward)
+        radius = max(kind.size[:2]) / 2 + UNDER_MARGIN
+        footprint = [np.zeros(2)] + [
+            r * np.array([np.cos(a), np.sin(a)])
+            for r in (radius / 2, radius)
+            for a in np.linspace(0, 2 * np.pi, 16, endpoint=False)
+        ]
+        for _ in range(UNDER_STEPS):
+            pos = self.scene.object_pos(object_id)
+            top = contact.top(kind, pos)[2] + 0.002
+            if all(self.scene.ceiling_above(pos[:2] + r, top, object_id) > top + height for r in footprint):
+                return
+            self.move_linear(self.scene.ee_pos() + [*(UNDER_STEP * toward), 0.0])
 
     def place(self, destination_id: str) -> None:
         """Carry the held object over the destination, lower it onto it, release, retreat; the hand
         and what it carries keep CARRY_MARGIN from the objects standing beside the way."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
-        over = self.top_of(destination_id)
+        over = self._drop_point(destination_id)
         rim = self._kind(self.held[0]).rim > 0  # a bowl, held by its wall, hanging off-centre
         if rim:  # the hand goes where the bowl's centre comes over the destination
             over[:2] -= self.scene.object_pos(self.held[0])[:2] - self.scene.ee_pos()[:2]
@@ -95,3 +131,98 @@ class Skills(Clearance):
         self.move_linear(behind)
         self.move_linear(behind + (distance + gap) * direction, speed=speed)
         self.move_to(self.scene.ee_pos() + [0.0, 0.0, 0.1])
+
+    def push_to(self, object_id: str, region_id: str, speed: float = 0.08) -> None:
+        """Slide a dish (a plate) along the table to the region's centre, straight or round a corner,
+        whichever way keeps it farthest from the objects standing beside it (`_dish_route`).
+
+        The closed fingers come down inside it, on the side away from where it goes, and drag it by
+        its inner wall; the hand stays over the dish all along, so nothing beside the way (a
+        cabinet's handles) is in the hand's way. At a corner the fingers cross to the other side.
+        """
+        kind = self._kind(object_id)
+        inside = kind.size[0] / 2 - DISH_WALL  # how far from its centre the inner wall is
+        self.gripper = CLOSED
+        for leg, stop in enumerate(self._dish_route(object_id, self.scene.object_pos(region_id)[:2])):
+            start = self.scene.object_pos(object_id)[:2]
+            way = np.array([*(stop - start), 0.0])
+            distance = float(np.linalg.norm(way))
+            direction = way / distance
+            down = self.bottom_of(object_id) - DISH_SET_BACK * direction + [0.0, 0.0, FINGER_TIP + DISH_FLOOR]
+            if leg == 0:
+                self.move_to(down + [0.0, 0.0, 0.08], yaw=grasp_yaw(float(np.arctan2(direction[1], direction[0])) + np.pi / 2))
+            self.move_linear(down)
+            self.move_linear(down + (distance + inside - DISH_SET_BACK) * direction, speed=speed)
+        self.move_to(self.scene.ee_pos() + [0.0, 0.0, 0.1])
+
+    def _dish_route(self, object_id: str, goal: np.ndarray) -> list[np.ndarray]:
+        """The stops of the way a dish is slid to `goal`: straight there, or by the corner of either
+        axis first, the one whose sweep passes farthest from the other objects' footprints."""
+        radius = max(self._kind(object_id).size[:2]) / 2
+        start = self.scene.object_pos(object_id)[:2]
+        others = [o.id for o in self.spec.objects if o.id != object_id and not self._kind(o.id).is_site]
+        routes = [[goal], [np.array([start[0], goal[1]]), goal], [np.array([goal[0], start[1]]), goal]]
+
+        def gap(route: list[np.ndarray]) -> float:
+            stops = [start, *route]
+            swept = [a + t * (b - a) for a, b in zip(stops, stops[1:]) for t in np.linspace(0, 1, 25)]
+            return min((self._footprint_gap(o, p) for o in others for p in swept), default=np.inf) - radius
+
+        return max(routes, key=gap)
+
+    def _footprint_gap(self, object_id: str, xy: np.ndarray) -> float:
+        """How far the point `xy` is from the object's footprint (its resting extents, turned as it stands)."""
+        yaw = self.scene.object_yaw(object_id)
+        local = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]]) @ (xy - self.scene.object_pos(object_id)[:2])
+        outside = np.maximum(np.abs(local) - np.asarray(self._kind(object_id).size[:2]) / 2, 0.0)
+        return float(np.linalg.norm(outside))
+
+    def turn_on(self, knob_id: str) -> None:
+        """Take the knob's ridge from above, fingers across it, and turn the hand KNOB_TURN about
+        the knob's axis (the way its joint turns on)."""
+        axis, rot = self.scene.body_pose(knob_id)
+        ridge = np.append(rot[:2, 1], 0.0)  # the ridge lies along the knob's y
+        top = self.scene.surface_below(axis[:2], axis[2] + 0.3)
+        yaw = grasp_yaw(float(np.arctan2(-ridge[0], ridge[1])))  # fingers closing across the ridge
+        grip = np.array([axis[0], axis[1], top - KNOB_GRIP])
+        self.move_to(grip + [0.0, 0.0, 0.07], yaw)
+        self.move_to(grip, yaw)
+        self.close()
+        for k in range(1, 5):  # a quarter of the turn at a time: the hand stays on the axis
+            self.move_to(grip, yaw + KNOB_TURN * k / 4)
+        self.hold(5)
+        self.open()
+        self.move_to(grip + [0.0, 0.0, 0.1])
+
+    def _drop_point(self, destination_id: str) -> np.ndarray:
+        """Where over a destination a carried thing is let down: the centre of its top, or of an
+        open drawer's uncovered part (between the cabinet's front and the drawer's)."""
+        kind, top = self._kind(destination_id), self.top_of(destination_id)
+        if "pull" not in kind.params:
+            return top
+        out = self._pull_direction(destination_id)
+        travel = float((self.scene.object_pos(destination_id) - np.asarray(self.spec.object(destination_id).pos)) @ out)
+        mouth, front = kind.params["opening"]
+        return top + (mouth + front - travel) / 2 * out
+
+    def _pull_direction(self, drawer_id: str) -> np.ndarray:
+        """The way a drawer slides out, in the world."""
+        return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._kind(drawer_id).params["pull"])
+
+    def pull_open(self, drawer_id: str, travel: float = DRAWER_PULL) -> None:
+        """Take the drawer's handle bar from the front, the hand level and its fingers closing up and
+        down on the bar, and pull it `travel` out along its slide; let go and back off, up and out."""
+        kind = self._kind(drawer_id)
+        site, rot = self.scene.object_pos(drawer_id), self.scene.body_pose(drawer_id)[1]
+        handle = site + rot @ np.asarray(kind.params["handle"])
+        out = self._pull_direction(drawer_id)
+        self.move_to([*self.scene.ee_pos()[:2], max(self.scene.ee_pos()[2], self.clearance())])
+        self.facing = facing(tuple(-out[:2]), kind.params["roll"])
+        self.move_to(handle + HANDLE_REACH * out)
+        self._settle(self.q)
+        self.move_linear(handle, speed=0.15)
+        self.close()
+        self.move_linear(handle + travel * out, speed=0.15)
+        self.open()
+        self.move_linear(self.scene.ee_pos() + 0.04 * out + [0.0, 0.0, 0.06], speed=0.2)
+        self.facing = None  # the next move turns the hand down again

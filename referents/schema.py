@@ -295,8 +295,9 @@ def _layout(raw: Any, fail: Callable[[str, str], ReferentSpecError], world: worl
             "jitter a number of 0 or more (or one per slot), yaw [min, max]",
         ) from None
     x0, x1, y0, y1 = world.reach
-    for i, (x, y, *_) in enumerate(layout.slots):
-        if not (x0 <= x <= x1 and y0 <= y <= y1):
+    for i, (x, y, *z) in enumerate(layout.slots):
+        fixed = bool(z) and layout.jitter_at(i) == 0  # a place on furniture (the stove's knob stands beyond the reach)
+        if not fixed and not (x0 <= x <= x1 and y0 <= y <= y1):
             raise fail(
                 f"layout.slots[{i}]",
                 f"({x}, {y}) is off the workspace of world {world.name} (x in [{x0:g}, {x1:g}], y in [{y0:g}, {y1:g}])",

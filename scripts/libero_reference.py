@@ -7,7 +7,8 @@ environment, but may import it for `model_arrays` (LIBERO is imported only where
 Commands (the request is JSON; what comes back is written to <out>):
 
 * `render` — {"suite", "size", "cases": [[task, state], ...]}: LIBERO's `OffScreenRenderEnv` at
-  each of its own initial states; <out> (.npz) gets `<task>-<state>-agentview` and
+  each of its own initial states (with `"joints": {name: value}`, those of its fixtures' joints set
+  there: a drawer open, the knob turned); <out> (.npz) gets `<task>-<state>-agentview` and
   `-eye_in_hand` frames as LIBERO returns them (robosuite's raw, upside-down OpenGL frames),
   `-agentview-labels` and `-eye_in_hand-labels` (the object or fixture each pixel of that frame
   shows: MuJoCo's segmentation render, as indices into `-things`, LIBERO's instance names of the
@@ -16,7 +17,8 @@ Commands (the request is JSON; what comes back is written to <out>):
   fixture's body pose, which LIBERO draws anew at every reset).
 * `replay` — {"episodes": [{"objects": [{"instance", "kind", "pos", "quat"}], "target",
   "container", "arm", "fingers", "actions"}]}: a BDDL problem of LIBERO's floor scene holding
-  every object of the request, with goal `(In <target> <container>_contain_region)`, is written
+  every object of the request, with goal `(In <target> <container>_contain_region)` (or the
+  episode's own `goal`, BDDL words: `["Open", "wooden_cabinet_1_middle_region"]`), is written
   for each goal, LIBERO's environment is made from it and set to each episode's recorded initial
   state (joints by name; objects the episode does not use on the floor out of reach), the
   actions are stepped, and <out> (.json) gets, per episode, `check_success()` after the last
@@ -115,6 +117,11 @@ def render(request: dict, out: str) -> None:
         env = make_env(bddl, request["size"])
         for state in states:
             obs = env.set_init_state(initial[state])
+            if request.get("joints"):  # the fixtures' joints set (a drawer open, the knob turned), drawn again
+                for joint, value in request["joints"].items():
+                    env.sim.data.qpos[env.sim.model.get_joint_qpos_addr(joint)] = value
+                env.sim.forward()
+                obs = env.env._get_observations(force_update=True)
             things = [*env.env.objects_dict, *env.env.fixtures_dict]
             arrays[f"{task}-{state}-things"] = np.array(things)
             for cam in CAMERAS:
@@ -126,20 +133,24 @@ def render(request: dict, out: str) -> None:
     np.savez(out, **arrays)
 
 
-def _goal(suite: str | None, target: str, container: str) -> str:
-    """LIBERO's goal of carrying `target` to `container`: `In` its contain region on LIBERO-Object's
-    floor, `On` it on a suite's table."""
+def _goal(suite: str | None, episode: dict) -> str:
+    """An episode's LIBERO goal: its own `goal` (BDDL words: a drawer opened, the stove turned on),
+    else carrying `target` to `container`: `In` its contain region on LIBERO-Object's floor, `On` it
+    on a suite's table."""
+    if "goal" in episode:
+        return f"({' '.join(episode['goal'])})"
+    target, container = episode["target"], episode["container"]
     return f"(On {target} {container})" if suite else f"(In {target} {container}_contain_region)"
 
 
-def _environment(request: dict, objects: dict[str, str], target: str, container: str, tmp: str, size: int, cameras: bool):  # noqa: ANN202
+def _environment(request: dict, objects: dict[str, str], episode: dict, tmp: str, size: int, cameras: bool):  # noqa: ANN202
     """LIBERO's environment holding `objects`: LIBERO's floor scene, or with a `suite` that suite's
-    table (its fixtures), the goal of carrying `target` to `container`."""
+    table (its fixtures), with the episode's goal."""
     suite = request.get("suite")
-    bddl = os.path.join(tmp, f"{target}-{container}.bddl")
+    goal = _goal(suite, episode)
+    bddl = os.path.join(tmp, f"{abs(hash(goal))}.bddl")
     with open(bddl, "w") as f:
-        goal = _goal(suite, target, container)
-        f.write(table_bddl(suite, objects, goal) if suite else floor_bddl(objects, [container], goal))
+        f.write(table_bddl(suite, objects, goal) if suite else floor_bddl(objects, [episode["container"]], goal))
     return make_env(bddl, size, cameras)
 
 
@@ -157,13 +168,13 @@ def replay(request: dict, out: str) -> None:
     the request's `fixtures` ([name, x, y, z, qw, qx, qy, qz]) put them, and its goal LIBERO's `On`."""
     episodes = request["episodes"]
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
-    goals: dict[tuple[str, str], list[int]] = {}
+    goals: dict[str, list[int]] = {}
     for i, e in enumerate(episodes):
-        goals.setdefault((e["target"], e["container"]), []).append(i)
+        goals.setdefault(_goal(request.get("suite"), e), []).append(i)
     results: list = [None] * len(episodes)
     with tempfile.TemporaryDirectory() as tmp:
-        for (target, container), indices in goals.items():
-            env = _environment(request, objects, target, container, tmp, 32, cameras=False)
+        for indices in goals.values():
+            env = _environment(request, objects, episodes[indices[0]], tmp, 32, cameras=False)
             for i in indices:
                 env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
                 _pose(env, request, episodes[i])
@@ -185,7 +196,7 @@ def scenes(request: dict, out: str) -> None:
     arrays = {}
     with tempfile.TemporaryDirectory() as tmp:
         first = episodes[0]
-        env = _environment(request, objects, first["target"], first["container"], tmp, size, cameras=True)
+        env = _environment(request, objects, first, tmp, size, cameras=True)
         things = [*env.env.objects_dict, *env.env.fixtures_dict]
         for k, episode in enumerate(episodes):
             env.reset()

@@ -98,14 +98,17 @@ def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, sim: SimSet
 _LIBEROS_RENDERS: dict[str, Path] = {}  # request -> LIBERO's frames of it: each look is compared with one render
 
 
-def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: Path, look: str = FAST) -> tuple[Pictures, float]:
+def initial_state_pictures(
+    suite: str, cases: list[tuple[int, int]], tmp_path: Path, look: str = FAST, joints: dict[str, float] | None = None
+) -> tuple[Pictures, float]:
     """Our frames, drawn with `look`, against LIBERO's own render at LIBERO's initial states of a
     suite (LIBERO's or LIBERO-PRO's): `cases` are (task number in the suite's order, state); the
-    fixtures posed as LIBERO drew them for each. Returns the pictures' figures and the farthest
-    any object stands from where LIBERO puts it (m)."""
+    fixtures posed as LIBERO drew them for each, their `joints` (name -> value) set in both. Returns
+    the pictures' figures and the farthest any object stands from where LIBERO puts it (m)."""
     chosen = suite_of(CanonicalOptions(suite=suite))
     names = list(libero.tasks(suite))
     request = {"suite": suite, "size": LIBERO.image_size, "cases": [list(c) for c in cases], "tasks": names}
+    request |= {"joints": joints} if joints else {}
     key = json.dumps(request, sort_keys=True)
     if key not in _LIBEROS_RENDERS:
         _LIBEROS_RENDERS[key] = liberos_own("render", request, tmp_path / f"{suite}.npz")
@@ -123,8 +126,10 @@ def initial_state_pictures(suite: str, cases: list[tuple[int, int]], tmp_path: P
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
             if names[t] in chosen.tasks:
                 ids = [o.id for o in load_state(scene, chosen, names[t], s, sim).objects]
-            else:  # a task our skills cannot do (LIBERO-Goal's drawers): its objects under LIBERO's names
+            else:  # a task our skills cannot do (LIBERO-Goal's wine bottle's): its objects under LIBERO's names
                 ids = _load_by_name(scene, chosen, names[t], s, sim)
+            if joints:
+                scene.set_joints({j: np.array([v]) for j, v in joints.items()}, {j: np.zeros(1) for j in joints})
             pictures.compare(cameras, theirs, f"{t}-{s}", f"{suite} task {t} state {s}")
             ours = {instance: scene.object_pos(i) for i, instance in zip(ids, chosen.problem(names[t]).objects)}
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
@@ -178,28 +183,36 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     from gen.build import scenes
     from gen.lerobot.reader import LeRobotReader
 
-    reader, sites = LeRobotReader(dataset), {k.name: k.params["site"] for k in world.kinds.values() if k.is_site}
+    reader, sites = LeRobotReader(dataset), {k.name: k.anchor for k in world.kinds.values() if k.is_site}
     records = scenes.read(dataset)
     if "world" in records:
         records = records[records["world"] == world.name]
     episodes = []
     for record in records.itertuples():
-        scene, params = json.loads(record.scene), json.loads(record.spec)["task"]["params"]
+        scene, task = json.loads(record.scene), json.loads(record.spec)["task"]
+        params = task["params"]
         instance = {o["id"]: sites.get(o["kind"], o["instance"]) for o in scene["objects"]}
-        moved, goal = (params["object"], record.target) if "object" in params else (record.target, params["destination"])
-        rows = reader.data[reader.data.episode_index == record.episode_index]
-        episodes.append(
-            {
-                "objects": [
-                    {k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites
-                ],
-                "target": instance[moved],
-                "container": instance[goal],
-                "arm": scene["robot"]["arm"],
-                "fingers": scene["robot"]["fingers"],
-                "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
-            }
+        kinds = {o["id"]: o["kind"] for o in scene["objects"]}
+        moved, goal = (
+            (params.get("object"), record.target) if "destination" not in params else (record.target, params["destination"])
         )
+        rows = reader.data[reader.data.episode_index == record.episode_index]
+        episode = {
+            "objects": [
+                {k: o[k] for k in ("instance", "kind", "pos", "quat")} for o in scene["objects"] if o["kind"] not in sites
+            ],
+            "target": instance[moved] if moved else None,
+            "container": instance[goal],
+            "arm": scene["robot"]["arm"],
+            "fingers": scene["robot"]["fingers"],
+            "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
+        }
+        if task["program"] in libero.GOALS:  # a motion of LIBERO-Goal's (a drawer, the knob, a push)
+            place = libero.place_name(world.kind(kinds[goal]), instance[goal])
+            episode["goal"] = libero.goal(task["program"], place, instance[moved] if moved else None)
+        elif moved is None and "destination" not in params:  # pick, push: LIBERO has none; judged by positions
+            episode["goal"] = ["Up", instance[goal]]
+        episodes.append(episode)
     if not world.fixtures:
         return {"episodes": episodes}
     fixtures = {tuple([f["instance"], *f["pos"], *f["quat"]]) for r in records.scene for f in json.loads(r)["fixtures"]}

@@ -181,7 +181,8 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
         return f"our skills cannot do it ({goal}: docs/LIBERO.md says which tasks each world covers)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
-    if not carried_kind.is_site and not carried_kind.graspable():
+    pushed = design.task is not None and design.task.program == "push_to"  # slid along the table, never held
+    if not carried_kind.is_site and not pushed and not carried_kind.graspable():
         return f"its {carried_kind.name} is wider than the Panda's fingers open"
     if not len(libero.initial_states(suite, task)):
         return "its initial-state file is empty"
@@ -298,7 +299,7 @@ def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings)
 
 
 def covered(referent: Referent, world: worlds.World) -> list[str]:
-    """The base suite's tasks the referent type can lay out (LIBERO-Goal's drawers and knob are not)."""
+    """The base suite's tasks the referent type can lay out (LIBERO-Goal's wine bottle's are not)."""
     return list(suite_of(CanonicalOptions(world=world.name)).tasks)
 
 

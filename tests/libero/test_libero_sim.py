@@ -157,16 +157,21 @@ def test_a_generated_exam_of_a_floor_and_a_table_type_runs_in_liberos_simulator(
     ("argv", "needle"),
     [
         (["policy=nothing", "sim=mujoco"], "sim must be one of ours, libero, got 'mujoco'"),
-        (["policy=oracle", "sim=libero"], "policy oracle reads our simulator's state and plans"),
+        # the policies it does take listed as names (they were once listed letter by letter)
+        (["policy=oracle", "sim=libero"], "policy oracle reads our simulator's state and plans, not observations: it takes"),
+        (["policy=oracle", "sim=libero"], "act on observations (nothing, random, remote:HOST:PORT"),
         (["policy=position", "sim=libero"], "policy position reads our simulator's state and plans"),
     ],
 )
-def test_bad_input_is_refused_before_any_rollout(argv: list[str], needle: str, canonical: Path, tmp_path: Path) -> None:
+def test_bad_input_is_refused_before_any_rollout(
+    argv: list[str], needle: str, canonical: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from eval.__main__ import EvalOptions, evaluate
     from jobs.cli import main
 
     out = tmp_path / "out"
     assert main("python -m eval", EvalOptions, evaluate, [*argv, f"exam={canonical}", f"out={out}"]) == 2
+    assert needle in capsys.readouterr().err
     assert not out.exists() and not (tmp_path / ".out.partial").exists()
 
 

@@ -1,19 +1,26 @@
-"""LIBERO-Goal's goal axis: the named object goes where the instruction says (see goal.yaml beside it).
+"""LIBERO-Goal's goal axis: what the instruction asks is done where it says (see goal.yaml beside it).
 
-The target of an episode is the destination (a place on the stove or the cabinet, the plate, the
-bowl) and `task.params.object` is what to carry, as in the goal referent; the four objects stand
-in the table's places, each in every place equally often, and the stove's burner and the
-cabinet's top are in every scene. The swap keeps the object and names another of its places.
+The target of an episode is the place it names (a place on the stove or the cabinet, the plate,
+the bowl, a drawer, the stove's knob, the table in front of the stove) and `task.params.object` is
+what is moved there, where something is; the program is the task's: `place` carries the object
+there, and the motions (`motions` in the spec) open a drawer, turn the knob on, push the plate, put
+the bowl in a drawer it opens. The four objects stand in the table's places, each in every place
+equally often, and the places on furniture are in every scene; every task LIBERO-Goal asks that our
+skills can do is asked equally often. The swap keeps the program and the object and names another
+of its places.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from itertools import combinations
 
 import numpy as np
 
 from core import libero, worlds
+from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
+from core.success import PREDICATES
 from referents import scenery
 from referents.balance import Balance
 from referents.compose import slug
@@ -22,12 +29,55 @@ from referents.features import IDENTITY, POSITION, Alternative, Feature, object_
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
+_DRAWER_SLOT = 0.13  # how far a drawer a thing goes in is pulled (m): 12 cm of it then lie uncovered
+_DRAWER_LIFT = 0.22  # how high a thing for a drawer is lifted: over the drawer's sides, so no later rise shakes it loose
 
 
 def _goals(cfg: ReferentConfig) -> dict[str, list[str]]:
     """Where each carried object may go, less what `holdout=` keeps out of the scenes."""
     kept = {str(k): [str(d) for d in v if str(d) not in cfg.holdout] for k, v in cfg.need("goals", dict).items()}
     return {k: v for k, v in kept.items() if k not in cfg.holdout}
+
+
+def _motions(cfg: ReferentConfig) -> dict[str, dict]:
+    """The motions (program -> places, object moved, words), less what `holdout=` keeps out."""
+    kept = {}
+    for program, motion in cfg.extra.get("motions", {}).items():
+        places = [str(p) for p in motion["places"] if str(p) not in cfg.holdout]
+        if places and motion.get("object") not in cfg.holdout:
+            kept[str(program)] = {**motion, "places": places}
+    return kept
+
+
+def _tasks(cfg: ReferentConfig, displaced: bool = True) -> list[tuple[str, str, str]]:
+    """Every (program, object moved or "", place) an instruction may ask: each carried object to each
+    of its aims, and each motion at each of its targetable places (`displaced`: only the motions
+    asked in displaced scenes too, not those asked on LIBERO's own layout alone)."""
+    carry = [(cfg.task.program, c, d) for c in _goals(cfg) for d in _aims(cfg, c)]
+    return carry + [
+        (p, str(m.get("object", "")), d)
+        for p, m in _motions(cfg).items()
+        for d in m["places"]
+        if _named(cfg, d).targetable and (m.get("displaced", True) or not displaced)
+    ]
+
+
+def _others(cfg: ReferentConfig, program: str, carried: str, place: str) -> list[str]:
+    """The places a swap of the task may name: the object's other places, or the motion's."""
+    places = _motions(cfg)[program]["places"] if program in _motions(cfg) else _goals(cfg)[carried]
+    return [d for d in places if d != place]
+
+
+def _say(cfg: ReferentConfig, template: str, program: str, carried: str, place: str) -> str:
+    """The instruction asking for a task: the template's words for carrying, a motion's own."""
+    if program in _motions(cfg):
+        return str(_motions(cfg)[program]["say"]).format(object=carried, place=place)
+    return template.format(object=carried, destination=_phrase(cfg, place))
+
+
+def _changed(cfg: ReferentConfig, program: str, place: str) -> str:
+    """The words of an instruction that name its place."""
+    return place if program in _motions(cfg) else _phrase(cfg, place)
 
 
 def _aims(cfg: ReferentConfig, carried: str) -> list[str]:
@@ -53,12 +103,20 @@ def _fixed(cfg: ReferentConfig) -> list[Placement]:
     return [Placement(slug(c.key), c, _sites(cfg)[c.name]) for c in cfg.objects if c.name in _sites(cfg)]
 
 
+def _stands(cfg: ReferentConfig, name: str) -> list[int]:
+    """The table's slots an object may stand in: all but those `keep_off` keeps it off."""
+    off = {int(s) for s in cfg.extra.get("keep_off", {}).get(name, [])}
+    return [s for s in _table_slots(cfg) if s not in off]
+
+
 def _table_slots(cfg: ReferentConfig) -> list[int]:
     return [s for s in range(len(cfg.layout.slots)) if s not in _sites(cfg).values()]
 
 
 def validate(cfg: ReferentConfig) -> None:
     names = {c.name for c in cfg.objects}
+    if not all(isinstance(v, list) for v in cfg.need("goals", dict).values()):
+        raise cfg.fail("goals", "maps each carried object's name to a list of the places it may go")
     goals = _goals(cfg)
     if not goals or any(k not in names or not v or any(d not in names for d in v) for k, v in goals.items()):
         raise cfg.fail("goals", "maps each carried object's name to the names of two or more places it may go")
@@ -66,7 +124,17 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("goals", "each carried object needs two or more places: the swap names another")
     if any(d not in cfg.need("phrases", dict) for v in goals.values() for d in v):
         raise cfg.fail("phrases", "needs the words for every place in goals")
-    if not any(_aims(cfg, carried) for carried in goals):
+    motions = cfg.extra.get("motions", {})
+    if not isinstance(motions, dict) or any(
+        p not in PREDICATES
+        or not isinstance(m, dict)
+        or not isinstance(m.get("say"), str)
+        or not isinstance(m.get("places"), list)
+        or not {str(d) for d in m["places"]} <= names
+        for p, m in motions.items()
+    ):
+        raise cfg.fail("motions", f"maps programs ({', '.join(PREDICATES)}) to their places (names of objects) and words (say)")
+    if not _tasks(cfg):
         raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place any object may be asked to go")
     world = worlds.world(cfg.world)
     sited = {c.name for c in cfg.role("destination") if world.kind(c.kind).is_site}
@@ -74,40 +142,87 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("sites", "maps each place on furniture (a destination of a site kind) to its slot of layout.slots")
     if len([c for c in cfg.objects if c.name not in sited]) > len(_table_slots(cfg)):
         raise cfg.fail("layout.slots", "needs a table slot per object besides the places on furniture")
+    keep_off = cfg.extra.get("keep_off", {})
+    if (
+        not isinstance(keep_off, dict)
+        or not set(keep_off) <= names
+        or not all(isinstance(v, list) and all(isinstance(s, int) for s in v) for v in keep_off.values())
+    ):
+        raise cfg.fail("keep_off", "maps objects' names to the lists of table slots they never stand in")
+    table = [c.name for c in cfg.objects if c.name not in sited]
+    crowded = next(
+        (
+            group
+            for k in range(1, len(table) + 1)
+            for group in combinations(table, k)
+            if len(set().union(*(_stands(cfg, n) for n in group))) < k
+        ),
+        None,
+    )
+    if crowded:
+        raise cfg.fail("keep_off", f"leaves {', '.join(crowded)} fewer table slots than they are objects")
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
-    goals = _goals(cfg)
-    carried = _named(cfg, balance.pick("carried", [c for c in goals if _aims(cfg, c)]))
-    goal = balance.pick(("goal", carried.name), _aims(cfg, carried.name))
-    other = balance.pick(("other", carried.name, goal), [d for d in goals[carried.name] if d != goal])
+    program, carried, goal = balance.pick("task", _tasks(cfg))
+    others = _others(cfg, program, carried, goal)
+    other = balance.pick(("other", program, carried, goal), others) if others else None
     placements: list[Placement] = []
-    for cand in (c for c in cfg.objects if c.name not in _sites(cfg)):
-        free = [s for s in _table_slots(cfg) if s not in {p.slot for p in placements}]
+    table = [c for c in cfg.objects if c.name not in _sites(cfg)]
+    for cand in sorted(table, key=lambda c: len(_stands(cfg, c.name))):  # the most restricted first: each finds a place
+        free = [s for s in _stands(cfg, cand.name) if s not in {p.slot for p in placements}]
         placements.append(Placement(slug(cand.key), cand, balance.pick(("slot", cand.key), free, also="slot")))
-    placements += _fixed(cfg)
+    placements = sorted(placements, key=lambda p: table.index(p.candidate)) + _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}
     template = balance.pick("template", cfg.templates)
 
-    def say(destination: str) -> str:
-        return template.format(object=carried.name, destination=_phrase(cfg, destination))
+    def say(place: str) -> str:
+        return _say(cfg, template, program, carried, place)
 
+    swaps = (
+        []
+        if other is None
+        else [Counterfactual(say(other), ids[other], (_changed(cfg, program, goal), _changed(cfg, program, other)))]
+    )
     return Design(
         placements=tuple(placements),
         target=ids[goal],
         template=template,
         instruction=say(goal),
-        counterfactuals=(Counterfactual(say(other), ids[other], (_phrase(cfg, goal), _phrase(cfg, other))),),
-        task=TaskSpec(program=cfg.task.program, params={"object": ids[carried.name]}),
+        counterfactuals=tuple(swaps),
+        task=TaskSpec(program=program, params={"object": ids[carried]} if carried else {}),
     )
 
 
+def demo(skills: Skills, spec: EpisodeSpec) -> None:
+    """The task's program: a motion on the furniture, or carrying (after opening the drawer it goes in)."""
+    program, place = spec.task.program, spec.target
+    if program == "open":
+        skills.pull_open(place)
+    elif program == "turn_on":
+        skills.turn_on(place)
+    elif program == "push_to":
+        skills.push_to(spec.task.params["object"], place)
+    else:
+        if (
+            program == "place_in"
+        ):  # open enough to take the object, no farther: wide open, its front stands over the table's objects
+            skills.pull_open(place, _DRAWER_SLOT)
+        skills.grasp(spec.task.params["object"])
+        skills.lift(_DRAWER_LIFT if program == "place_in" else 0.1)
+        skills.place(place)
+
+
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
-    carried = spec.object(spec.task.params["object"])
-    places = set(_goals(cfg)[carried.name])
+    moved = spec.task.params.get("object")
+    carried = spec.object(moved) if moved else None
+    named = spec.object(spec.target).name
+    places = {named, *_others(cfg, spec.task.program, carried.name if carried else "", named)}
     destinations = [o.id for o in spec.objects if o.name in places]
 
     def extra(o: SceneObject) -> dict[str, Feature]:
+        if carried is None:
+            return {}
         return {
             "carried object and destination": Feature((carried.name, o.name), IDENTITY),
             "carried object slot and destination slot": Feature((carried.slot, o.slot), POSITION | IDENTITY),
@@ -121,7 +236,8 @@ def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
 
 
 def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Candidate | None:
-    """The place a BDDL name means: an object of the problem, or a fixture's site."""
+    """The place a BDDL name means: an object of the problem, or a place on the furniture (a fixture's
+    site, or the name LIBERO's goals give a point of it: `goal_name`)."""
     world = worlds.world(cfg.world)
     kind = problem.objects.get(name)
     base = scenery.base_kind(cfg, kind) if kind is not None else None
@@ -129,23 +245,42 @@ def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Can
         (
             c
             for c in cfg.role("destination") + cfg.role("object")
-            if c.kind == base or world.kind(c.kind).params.get("site") == name
+            if c.kind == base or name in (world.kind(c.kind).params.get("site"), world.kind(c.kind).params.get("goal_name"))
         ),
         None,
     )
 
 
-def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
-    """A LIBERO-Goal task's own scene, if its goal is one of ours (`On <object> <place>`): its
-    objects under LIBERO's instance names, LIBERO's instruction, and a swap to each other place
-    the object may go; None for the tasks our skills cannot do (drawers, the knob, pushing)."""
+# LIBERO's goal predicates and the programs that do them: `On` a place on the table is pushing there,
+# `In` a drawer is putting the object inside it, `On` anything else is carrying (the spec's program)
+_LIBEROS = {"open": "open", "turnon": "turn_on", "in": "place_in"}
+
+
+def _task(cfg: ReferentConfig, problem: libero.Problem) -> tuple[str, str, str] | None:
+    """A LIBERO-Goal problem's (program, object moved or "", place) among the tasks we ask, or None."""
+    if len(problem.goal) != 1:
+        return None
     predicate, *args = problem.goal[0]
-    if predicate.lower() != "on" or len(problem.goal) != 1:
+    place = _destination(cfg, problem, args[-1])
+    moved = problem.objects.get(args[0]) if len(args) == 2 else None
+    carried = scenery.candidate(cfg, moved).name if moved is not None else ""
+    if place is None or (len(args) == 2 and not carried):
         return None
-    carried, destination = problem.objects.get(args[0]), _destination(cfg, problem, args[1])
-    carried_name = scenery.candidate(cfg, carried).name if carried is not None else None
-    if carried_name is None or destination is None or destination.name not in _goals(cfg).get(carried_name, []):
+    program = _LIBEROS.get(predicate.lower(), cfg.task.program)
+    if program == cfg.task.program and "push_to" in _motions(cfg) and place.name in _motions(cfg)["push_to"]["places"]:
+        program = "push_to"
+    task = (program, carried, place.name)
+    return task if task in _tasks(cfg, displaced=False) else None
+
+
+def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
+    """A LIBERO-Goal task's own scene, if its goal is one of ours: its objects under LIBERO's instance
+    names, LIBERO's instruction, and a swap to each other place the task may name (the object's other
+    places; the other drawer); None for the tasks our skills cannot do (the wine bottle's)."""
+    task = _task(cfg, problem)
+    if task is None:
         return None
+    program, carried, place = task
     slots = cfg.layout.slots
     placements = []
     for instance, kind in problem.objects.items():
@@ -155,26 +290,28 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
         placements.append(Placement(instance, scenery.candidate(cfg, kind), slot))
     placements += _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}
-    template = cfg.templates[0]
 
-    def say(place: str) -> str:
-        return template.format(object=carried_name, destination=_phrase(cfg, place))
+    def say(other: str) -> str:
+        return _say(cfg, cfg.templates[0], program, carried, other)
 
-    others = [d for d in _goals(cfg)[carried_name] if d != destination.name]
+    moved = {"object": ids[carried]} if carried else {}
     return Design(
         placements=tuple(placements),
-        target=ids[destination.name],
-        template=template,
+        target=ids[place],
+        template=cfg.templates[0],
         instruction=libero.language(problem.name),
-        counterfactuals=tuple(Counterfactual(say(d), ids[d], (_phrase(cfg, destination.name), _phrase(cfg, d))) for d in others),
-        task=TaskSpec(program=cfg.task.program, params={"object": args[0]}),
+        counterfactuals=tuple(
+            Counterfactual(say(d), ids[d], (_changed(cfg, program, place), _changed(cfg, program, d)))
+            for d in _others(cfg, program, carried, place)
+        ),
+        task=TaskSpec(program=program, params=moved),
     )
 
 
 def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     """What a policy that learnt LIBERO-Goal's one layout instead of looking does with the trial's
-    task: it carries whatever stands where LIBERO stands that object to whatever stands where
-    LIBERO stands that place (the furniture's places never move). Like every shortcut it does not
+    task: it carries (or pushes) whatever stands where LIBERO stands that object to whatever stands
+    where LIBERO stands that place (the furniture's places, and its motions, never move). Like every shortcut it does not
     read the instruction, so on LIBERO's own states it does the task and no swap."""
     suite = worlds.world(cfg.world).suite
     problem = libero.problem(suite, libero.tasks(suite)[0])
@@ -185,6 +322,8 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
         x, y = remembered[scenery.base_kind(cfg, kind)]
         return min((o for o in table if o.id != besides), key=lambda o: np.hypot(o.pos[0] - x, o.pos[1] - y)).id
 
+    if "object" not in spec.task.params:  # a motion of the furniture: where it always is
+        return spec
     named = spec.object(spec.target)
     destination = nearest(named.kind) if scenery.base_kind(cfg, named.kind) in remembered else named.id
     carried = nearest(spec.object(spec.task.params["object"]).kind, besides=destination)
