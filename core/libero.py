@@ -150,7 +150,7 @@ KINDS: dict[str, Kind] = {
             0.0,
             params={"body": "table", "offset": (-0.05, 0.21, 0.02), "goal_name": "main_table_stove_front_region"},
             contain=((0.0, 0.0, 0.0545), (0.04, 0.04, 0.0525)),
-        ),  # fmt: skip
+        ),
         # LIBERO-Goal's bottle (turbosquid_objects), standing
         Kind(
             "wine_bottle",
@@ -244,7 +244,7 @@ def goal(program: str, place: str, moved: str | None = None) -> list[str]:
 
 
 def place_name(kind: Kind, name: str) -> str:
-    """LIBERO's name of a place in its goals: a point of a fixture's its `goal_name`, else `name`
+    """LIBERO's name of a place in its goals: for a point on a fixture its `goal_name`, else `name`
     (the site's, or the object instance's)."""
     return str(kind.params.get("goal_name", name))
 

@@ -5,8 +5,8 @@ the bowl, a drawer, the stove's knob, the table in front of the stove) and `task
 what is moved there, where something is; the program is the task's: `place` carries the object
 there, and the motions (`motions` in the spec) open a drawer, turn the knob on, push the plate, put
 the bowl in a drawer it opens. The four objects stand in the table's places, each in every place
-equally often, and the places on furniture are in every scene; every task LIBERO-Goal asks that our
-skills can do is asked equally often. The swap keeps the program and the object and names another
+it may stand (`keep_off`) equally often, and the places on furniture are in every scene; every
+task LIBERO-Goal asks that our skills can do is asked equally often. The swap keeps the program and the object and names another
 of its places.
 """
 
@@ -29,7 +29,9 @@ from referents.features import IDENTITY, POSITION, Alternative, Feature, object_
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position",)
-_DRAWER_SLOT = 0.13  # how far a drawer a thing goes in is pulled (m): 12 cm of it then lie uncovered
+# how far a drawer a thing goes in is pulled (m): 12 cm of it then lie uncovered; wide open, its
+# front would stand over what stands before the cabinet, the bowl to be put in it
+_DRAWER_SLOT = 0.13
 _DRAWER_LIFT = 0.22  # how high a thing for a drawer is lifted: over the drawer's sides, so no later rise shakes it loose
 
 
@@ -204,9 +206,7 @@ def demo(skills: Skills, spec: EpisodeSpec) -> None:
     elif program == "push_to":
         skills.push_to(spec.task.params["object"], place)
     else:
-        if (
-            program == "place_in"
-        ):  # open enough to take the object, no farther: wide open, its front stands over the table's objects
+        if program == "place_in":
             skills.pull_open(place, _DRAWER_SLOT)
         skills.grasp(spec.task.params["object"])
         skills.lift(_DRAWER_LIFT if program == "place_in" else 0.1)
