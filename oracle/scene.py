@@ -406,26 +406,24 @@ class Scene:
     def surface_below(self, xy: np.ndarray, z: float) -> float:
         """Height of the first surface straight below (x, y, z) that is not the robot's: where a
         fingertip lowered there would land (-inf over nothing)."""
-        m, geom, down = self.model, np.zeros(1, np.int32), np.array([0.0, 0.0, -1.0])
-        while (distance := mujoco.mj_ray(m, self.data, np.array([xy[0], xy[1], z], float), down, None, 1, -1, geom)) >= 0:
-            z -= distance
-            if m.body_rootid[m.geom_bodyid[geom[0]]] != m.body_rootid[self.hand]:
-                return z
-            z -= 1e-4  # through the robot's geom, on down
-        return -np.inf
+        return self._first_surface(xy, z, -1.0)
 
     def ceiling_above(self, xy: np.ndarray, z: float, besides: str | None = None) -> float:
         """Height of the first surface straight above (x, y, z) that is neither the robot's nor the
         object `besides`'s: what a thing lifted there, or a hand come down there, would meet (inf
         under nothing)."""
-        m, geom, up = self.model, np.zeros(1, np.int32), np.array([0.0, 0.0, 1.0])
-        skip = self.placed[besides].body_id if besides is not None else -1
-        while (distance := mujoco.mj_ray(m, self.data, np.array([xy[0], xy[1], z], float), up, None, 1, skip, geom)) >= 0:
-            z += distance
+        return self._first_surface(xy, z, 1.0, self.placed[besides].body_id if besides is not None else -1)
+
+    def _first_surface(self, xy: np.ndarray, z: float, sign: float, skip: int = -1) -> float:
+        """The height of the first surface along z from (x, y, z), up (`sign` 1) or down (-1), that is
+        neither the robot's (rays pass through its geoms) nor body `skip`'s; sign * inf if none."""
+        m, geom, direction = self.model, np.zeros(1, np.int32), np.array([0.0, 0.0, sign])
+        while (distance := mujoco.mj_ray(m, self.data, np.array([xy[0], xy[1], z], float), direction, None, 1, skip, geom)) >= 0:
+            z += sign * distance
             if m.body_rootid[m.geom_bodyid[geom[0]]] != m.body_rootid[self.hand]:
                 return z
-            z += 1e-4  # through the robot's geom, on up
-        return np.inf
+            z += sign * 1e-4  # through the robot's geom, on
+        return sign * np.inf
 
     def hand_gap(self, path: Sequence[np.ndarray], held: str | None, among: Sequence[str], within: float) -> float:
         """The smallest distance, up to `within`, between the hand with the object `held` (carried
