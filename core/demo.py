@@ -14,14 +14,16 @@ from core.spec import EpisodeSpec
 
 
 class Skills(Protocol):
-    def grasp(self, object_id: str) -> None:
-        """Come down on the object from above and close the fingers on it."""
+    def grasp(self, object_id: str, onto: str | None = None) -> None:
+        """Come down on the object from above and close the fingers on it (across the slope of a
+        sloping shelf it will be laid `onto`)."""
 
     def lift(self, height: float = 0.15) -> None:
         """Raise the hand (and whatever it holds) straight up by `height` metres."""
 
     def place(self, destination_id: str) -> None:
-        """Carry the held object over the destination, lower it onto it, release."""
+        """Carry the held object over the destination, lower it onto it (lay it along a sloping
+        shelf), release."""
 
     def push(self, object_id: str) -> None:
         """Slide the object along the table, away from the robot."""

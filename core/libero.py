@@ -53,6 +53,8 @@ DRAWER_REGION = (0.10224, 0.07561, 0.02993)  # LIBERO's cabinet drawer regions' 
 DRAWER_HANDLE = (-0.00606, -0.11289)  # a drawer's handle bar from its region's site, in the drawer's frame (wooden_cabinet.xml)
 # how far out from a closed drawer's site the cabinet's top ends, and the inner face of the drawer's front
 DRAWER_OPENING = (0.0893, 0.0838)
+RACK_REGION = (0.10087, 0.022, 0.00251)  # the wine rack's top region's half size (wine_rack.xml)
+RACK_TILT = float(2 * np.arctan2(-0.5187733, 0.8549119))  # its turn about the rack's x (the site's quat there)
 KNOB_RADIUS = 0.03  # how far from the stove knob's axis the point that stands for it is
 
 
@@ -124,6 +126,14 @@ KINDS: dict[str, Kind] = {
         # the site) and the cabinet's top
         _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
         _on_fixture("cabinet_top", "wooden_cabinet_1_top_side", (0.12534, 0.09438, 0.00147), 0.0015, 0.09),
+        # LIBERO-Goal's wine rack: its top shelf, a plank sloping up toward the rack's back, LIBERO's
+        # region site on it turned `tilt` about its x. LIBERO's `On` of it is a thing's origin in the
+        # site's box, up to 10 cm up the slope (core/success.py); a bottle is laid along the plank, its
+        # bottom `lay` from the site (along the site's x, and up the slope: oracle/skills.py `_lay`)
+        replace(
+            _on_fixture("wine_rack_top", "wine_rack_1_top_region", RACK_REGION, 0.0, 0.0),
+            params={"site": "wine_rack_1_top_region", "half": RACK_REGION, "tilt": RACK_TILT, "lay": (-0.06, 0.04)},
+        ),
         # LIBERO-Goal's cabinet drawers, each the region site inside it (which moves with the drawer):
         # things rest on the drawer's floor, below the site; LIBERO's `In(x, <drawer region>)` is x's
         # origin in the site's box (a quarter turn about y makes its half size these, in the world)
@@ -158,7 +168,8 @@ KINDS: dict[str, Kind] = {
             (0.0426, 0.0442, 0.1569),
             -0.0011,
             "x",
-            params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"},
+            # taken by its neck (a top grasp reaches no lower), it is carried gently (oracle/motion.py GENTLE)
+            params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml", "neck": True},
             quat=FLAT,
         ),
     )

@@ -41,6 +41,7 @@ SLIDE_MAX_RISE = 0.02
 PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
 CONTAIN_FLOOR = 0.01  # LIBERO's `in_box` lowers the container box's floor by this much
 ON_RADIUS = 0.03  # LIBERO's `check_ontop`: origins this close horizontally
+ON_SITE_RISE = 0.10  # LIBERO's `On` of a site: the origin at most this far over the site's box
 OPEN_TRAVEL = 0.14  # LIBERO's wooden cabinet: a drawer is open past this far out (its joint below -0.14)
 TURN_ON = 0.5  # LIBERO's flat stove: on from this knob angle (radians)
 
@@ -75,6 +76,8 @@ def pushed(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
 def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     carried = spec.task.params["object"]
     dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    if "tilt" in dest.params:  # a sloping shelf: what lies on it is judged as LIBERO judges it
+        return _on_tilted(spec, outcome, carried, destination)
     obj = worlds.kind(spec.object(carried).kind, spec.sim.world)
     d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
     inside = bool(np.all(np.abs(o_end[:2] - d_end[:2]) <= dest.inner))
@@ -82,6 +85,21 @@ def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     resting = (o_end[2] - obj.bottom) <= dest_top + PLACE_MAX_HOVER
     dest_still = float(np.linalg.norm(outcome.shift(destination))) < 0.03
     return inside and resting and dest_still
+
+
+def _on_tilted(spec: EpisodeSpec, outcome: Outcome, thing: str, place: str) -> bool:
+    """LIBERO's `On(thing, <site>)` of a tilted site (the wine rack's shelf; envs/objects/site_object.py
+    `under`): `thing`'s origin within the site's box and up to ON_SITE_RISE over its face, the
+    offset multiplied by the site's matrix itself, as LIBERO multiplies it (the fixture stands
+    where its world puts it)."""
+    kind = worlds.kind(spec.object(place).kind, spec.sim.world)
+    site = kind.params["site"]
+    yaw = next(p.yaw for p in worlds.world(spec.sim.world).fixtures if site.startswith(f"{p.name}_"))
+    c, s, ct, st = np.cos(yaw), np.sin(yaw), np.cos(kind.params["tilt"]), np.sin(kind.params["tilt"])
+    matrix = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array([[1.0, 0.0, 0.0], [0.0, ct, -st], [0.0, st, ct]])
+    delta = matrix @ np.subtract(outcome.end[thing], outcome.end[place])
+    half = np.asarray(kind.params["half"])
+    return bool(np.all(np.abs(delta[:2]) < half[:2]) and half[2] < delta[2] < half[2] + ON_SITE_RISE)
 
 
 def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, floor: float) -> bool:

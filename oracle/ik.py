@@ -25,6 +25,14 @@ def facing(direction: tuple[float, float], roll: float = 0.0) -> np.ndarray:
     return np.column_stack([c * down + s * across, c * across - s * down, [x, y, 0.0]])
 
 
+def turned(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation by `angle` about the unit vector `axis` (Rodrigues): a held bottle turned down
+    along a sloping shelf."""
+    x, y, z = axis
+    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * k @ k
+
+
 class IKError(RuntimeError):
     """The pose is out of reach: IK did not converge."""
 

@@ -20,6 +20,7 @@ from oracle.trajectory import Limits, joint_path
 
 OPEN, CLOSED = -1.0, 1.0
 DELTA_GAIN = 3.0  # how much of the hand's error an end-effector delta asks for
+GENTLE = Limits(velocity=1.0, acceleration=2.0, jerk=15.0)  # a bottle held by its neck stays in the hand at these
 SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control steps
 
 
@@ -42,6 +43,7 @@ class Motion:
         self.q = scene.data.qpos[scene.arm_qpos].copy()  # where the arm is: the home pose, or a recorded start
         self.yaw = 0.0
         self.facing: np.ndarray | None = None  # the hand's orientation when it does not point down (oracle/ik.py facing)
+        self.gentle = False  # moves at GENTLE's limits: what the hand holds swings loose of a time-optimal move
         self.gripper = OPEN
         self.actions: list[np.ndarray] = []
         self.states: list[np.ndarray] = []  # physics state before each action
@@ -85,7 +87,7 @@ class Motion:
             if self.reseed is None:
                 raise
             goal = self.ik.solve(np.asarray(pos, dtype=float), yaw, seed=self.reseed, facing=self.facing)
-        return goal, joint_path(start, goal, self.dt, self.limits)
+        return goal, joint_path(start, goal, self.dt, GENTLE if self.gentle else self.limits)
 
     def _follow(self, goal: np.ndarray, path: list[np.ndarray], yaw: float) -> None:
         for q in path:

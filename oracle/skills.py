@@ -12,13 +12,20 @@ import numpy as np
 from core import contact
 from core.success import PUSH_DIRECTION
 from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
-from oracle.ik import facing, grasp_yaw
+from oracle.ik import DOWN, IKError, facing, grasp_yaw, turned, yaw_matrix
 from oracle.motion import CLOSED
 
 KNOB_GRIP = 0.012  # how far below the top of the stove knob's ridge the fingers close on it
 KNOB_TURN = 0.9  # how far the hand turns the knob (radians): past LIBERO's 0.5, short of its 2.1 stop
 # where the hand lines up in front of a drawer's handle; how far it pulls it (the drawer stops at 16 cm)
 HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
+RETREAT = 0.1  # how far the hand rises from where it let go
+REACH_STEP = 0.01  # how far at a time a release point out of reach moves toward the robot
+# laying a bottle along a sloping shelf (`_lay`): how far over the shelf its side is let go; how far
+# downhill of where it lies the hand starts, and over it; how far off the shelf the hand turns it (in
+# LAY_STEPS), and comes nearer; the steps it waits once let go; how far out of the shelf it backs off
+LAY_GAP, LAY_START, LAY_ABOVE, LAY_OVER, LAY_NEAR = 0.025, 0.05, 0.05, 0.06, 0.04
+LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
 SWIFT_LIFT = 0.15  # the highest lift made as one time-optimal joint move
 # how far at a time, and how many times, a held object slides out from under something; how far clear of it
 UNDER_STEP, UNDER_STEPS, UNDER_MARGIN = 0.03, 5, 0.01
@@ -28,20 +35,24 @@ DISH_WALL, DISH_SET_BACK, DISH_FLOOR = 0.023, 0.02, -0.003
 
 
 class Skills(Clearance):
-    """grasp, lift, place, push, and the fixtures' motions (turn a knob, pull a drawer open), over
-    the scene of one episode."""
+    """grasp, lift, place (or lay along a sloping shelf), push, and the fixtures' motions (turn a
+    knob, pull a drawer open), over the scene of one episode."""
 
     def open(self, steps: int = 6) -> None:
-        self.held = None
+        self.held, self.gentle = None, False
         super().open(steps)
 
-    def grasp(self, object_id: str, approach: float = 0.07) -> None:
-        """Come down on the object from above, fingers across its narrow axis, and close."""
+    def grasp(self, object_id: str, approach: float = 0.07, onto: str | None = None) -> None:
+        """Come down on the object from above, fingers across its narrow axis, and close; to be laid
+        `onto` a sloping shelf, fingers across the slope (the hand then turns it down along it)."""
         kind = self._kind(object_id)
         pos = self.scene.object_pos(object_id)  # where it stood before the hand came near
         top = contact.top(kind, pos)
         point = contact.grasp_point(kind, pos)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
+        if onto is not None and "tilt" in self._kind(onto).params:
+            x = self._shelf_axes(onto)[:, 0]
+            axis = float(np.arctan2(x[1], x[0])) + np.pi / 2
         if kind.rim:  # fingers across the wall, closing along its radius
             axis = self._rim_side(kind, pos, top[2])
             point[:2] = top[:2] = pos[:2] + kind.rim * np.array([np.cos(axis), np.sin(axis)])
@@ -53,6 +64,7 @@ class Skills(Clearance):
             self.move_to(point, yaw)
         self.close()
         self.held = (object_id, contact.grip_height(kind))
+        self.gentle = bool(kind.params.get("neck"))  # held by a narrow neck, a bottle swings: carried gently
 
     def lift(self, height: float = 0.15) -> None:
         """Raise the hand straight up by `height`; what it holds first slides toward the robot out
@@ -83,10 +95,14 @@ class Skills(Clearance):
             self.move_linear(self.scene.ee_pos() + [*(UNDER_STEP * toward), 0.0])
 
     def place(self, destination_id: str) -> None:
-        """Carry the held object over the destination, lower it onto it, release, retreat; the hand
-        and what it carries keep CARRY_MARGIN from the objects standing beside the way."""
+        """Carry the held object over the destination, lower it onto it (lay it along a sloping
+        shelf), release, retreat; the hand and what it carries keep CARRY_MARGIN from the objects
+        standing beside the way."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
+        if "tilt" in self._kind(destination_id).params:
+            self._lay(destination_id)
+            return
         over = self._drop_point(destination_id)
         rim = self._kind(self.held[0]).rim > 0  # a bowl, held by its wall, hanging off-centre
         if rim:  # the hand goes where the bowl's centre comes over the destination
@@ -95,6 +111,7 @@ class Skills(Clearance):
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
+        over = self._within_reach(over, max(carry_z, release_z + RETREAT), destination_id)
         above, down = [over[0], over[1], carry_z], [over[0], over[1], release_z]
         yaw = self.yaw if rim else self._release_yaw(above, down, destination_id)  # a turned bowl would hang elsewhere
         across = self._path_to(above, yaw)
@@ -110,7 +127,50 @@ class Skills(Clearance):
             self._settle(self.q)
             self.move_to(down)
         self.open()
-        self.move_to([over[0], over[1], release_z + 0.1])
+        self.move_to([over[0], over[1], release_z + RETREAT])
+
+    def _shelf_axes(self, shelf_id: str) -> np.ndarray:
+        """A sloping shelf's site axes in the world (columns): along the shelf, out of it (negated),
+        up its slope."""
+        return self.scene.body_pose(shelf_id)[1] @ turned(np.array([1.0, 0.0, 0.0]), self._kind(shelf_id).params["tilt"])
+
+    def _lay(self, shelf_id: str) -> None:
+        """Lay the held object along a sloping shelf (the wine rack's), its top uphill: over the
+        shelf, turn the hand with it down toward the slope, come down to LAY_GAP over the shelf, let
+        go, and back off out of it."""
+        axes, grip = self._shelf_axes(shelf_id), self.held[1]
+        up, out = axes[:, 2], -axes[:, 1]
+        along, rise = self._kind(shelf_id).params["lay"]
+        radius = min(self._kind(self.held[0]).size[:2]) / 2
+        bottom = self.scene.object_pos(shelf_id) + along * axes[:, 0] + rise * up + (radius + LAY_GAP) * out
+        downhill = -np.append(up[:2] / np.linalg.norm(up[:2]), 0.0)
+        self.move_to(bottom + LAY_START * downhill + [0.0, 0.0, max(self.scene.ee_pos()[2] - bottom[2], grip + LAY_ABOVE)])
+        pivot = np.cross([0.0, 0.0, 1.0], up)
+        angle, upright = float(np.arccos(up[2])), yaw_matrix(self.yaw) @ DOWN
+        for k in range(1, LAY_STEPS + 1):  # turned a step at a time, kept over the shelf as it turns
+            turn = turned(pivot / np.linalg.norm(pivot), angle * k / LAY_STEPS)
+            self.facing = turn @ upright
+            self.move_to(bottom + grip * turn[:, 2] + (LAY_OVER * (1 - k / LAY_STEPS) + LAY_NEAR) * out)
+        self.move_linear(bottom + grip * up, speed=0.05)
+        self.open()
+        self.hold(LAY_SETTLE)
+        self.move_linear(self.scene.ee_pos() + LAY_BACK * out, speed=0.05)
+        self.facing = None
+
+    def _within_reach(self, over: np.ndarray, height: float, destination_id: str) -> np.ndarray:
+        """`over`, or where the hand cannot reach that high there (a tall bottle carried over the
+        cabinet), the first point toward the robot, within the destination's `inner` square, where it can."""
+        toward = np.subtract(self.scene.world.robot_base[:2], over[:2])
+        toward /= np.linalg.norm(toward)
+        inner = self._kind(destination_id).inner
+        for step in np.arange(0.0, inner / np.max(np.abs(toward)), REACH_STEP):
+            point = np.append(over[:2] + step * toward, over[2])
+            try:
+                self.ik.solve(np.append(point[:2], height), self.yaw, seed=self.q)
+            except IKError:
+                continue
+            return point
+        return over
 
     def push(self, object_id: str, distance: float = 0.09, speed: float = 0.12) -> None:
         """Slide the object along the table (away from the robot) with the closed fingers.

@@ -299,7 +299,7 @@ def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings)
 
 
 def covered(referent: Referent, world: worlds.World) -> list[str]:
-    """The base suite's tasks the referent type can lay out (LIBERO-Goal's wine bottle's are not)."""
+    """The base suite's tasks the referent type can lay out."""
     return list(suite_of(CanonicalOptions(world=world.name)).tasks)
 
 

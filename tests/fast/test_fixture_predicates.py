@@ -1,7 +1,8 @@
 """LIBERO-Goal's motions judged from positions alone (core/success.py), at the edges LIBERO's own
 predicates draw: a drawer is open past 14 cm, the stove on from a knob turn of 0.5 rad, a thing in a
 drawer when its origin is in the region's box (floor lowered 1 cm), the plate in front of the stove
-when its origin is over that region."""
+when its origin is over that region, the bottle on the rack when its origin is in the tilted box
+over the rack's sloping shelf."""
 
 from __future__ import annotations
 
@@ -19,6 +20,10 @@ DRAWER = (0.0267, -0.2513, 1.0906)  # the top drawer's region site, closed
 KNOB_AXIS = np.array([-0.41, 0.21, 0.905])
 FRONT = (-0.05, 0.21, 0.895)  # the table's region in front of the stove
 BOWL, PLATE = (-0.09, 0.0, 0.898), (0.05, -0.02, 0.903)
+RACK = np.array([-0.26, -0.18003, 1.13745])  # the rack's top region's site, the rack turned half about
+# up the rack's shelf, and out of it, in the world: the site's z and -y (turned RACK_TILT about x, then half about z)
+UP_SHELF = np.array([0.0, np.sin(libero.RACK_TILT), np.cos(libero.RACK_TILT)])
+OUT_OF_SHELF = np.array([0.0, np.cos(libero.RACK_TILT), -np.sin(libero.RACK_TILT)])
 
 
 def _spec(program: str, target: str, moved: str | None = None) -> EpisodeSpec:
@@ -28,6 +33,8 @@ def _spec(program: str, target: str, moved: str | None = None) -> EpisodeSpec:
         SceneObject("drawer", "top_drawer", "top drawer", 8, DRAWER),
         SceneObject("knob", "stove_knob", "stove knob", 10, tuple(KNOB_AXIS + [-libero.KNOB_RADIUS, 0.0, 0.0])),
         SceneObject("front", "stove_front", "front of the stove", 11, FRONT),
+        SceneObject("bottle", "wine_bottle", "wine bottle", 3, (0.05, 0.14, 0.899)),
+        SceneObject("rack", "wine_rack_top", "rack", 12, tuple(RACK)),
     )
     sim = SimSettings(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_goal")
     task = TaskSpec(program=program, params={"object": moved} if moved else {})
@@ -79,6 +86,22 @@ def test_the_plate_is_in_front_of_the_stove_when_over_that_region(where: tuple[f
     assert _judge(spec, {"plate": (*where, PLATE[2])}) is over
     lifted = _judge(spec, {"plate": (*where, FRONT[2] + 0.12)})
     assert not lifted, "held 12 cm over the region is not on it"
+
+
+@pytest.mark.parametrize(
+    ("up", "out", "along", "on"),
+    [
+        (0.04, 0.0, 0.0, True),  # laid on the shelf
+        (0.04, 0.015, 0.09, True),
+        (0.001, 0.0, 0.0, False),  # not past the site's box (0.25 cm)
+        (0.11, 0.0, 0.0, False),  # more than 10 cm up the slope
+        (0.04, 0.03, 0.0, False),  # 3 cm off the shelf, past the box's 2.2
+        (0.04, 0.0, 0.11, False),  # past the shelf's end
+    ],
+)
+def test_the_bottle_is_on_the_rack_when_its_origin_is_in_the_tilted_box(up: float, out: float, along: float, on: bool) -> None:
+    spec = _spec("place", "rack", moved="bottle")
+    assert _judge(spec, {"bottle": tuple(RACK + up * UP_SHELF + out * OUT_OF_SHELF + [along, 0.0, 0.0])}) is on
 
 
 def test_liberos_goal_of_each_motion_names_liberos_own_things() -> None:

@@ -1,7 +1,7 @@
 """LIBERO-Goal's goal axis: what the instruction asks is done where it says (see goal.yaml beside it).
 
-The target of an episode is the place it names (a place on the stove or the cabinet, the plate,
-the bowl, a drawer, the stove's knob, the table in front of the stove) and `task.params.object` is
+The target of an episode is the place it names (a place on the stove or the cabinet, the wine
+rack's shelf, the plate, the bowl, a drawer, the stove's knob, the table in front of the stove) and `task.params.object` is
 what is moved there, where something is; the program is the task's: `place` carries the object
 there, and the motions (`motions` in the spec) open a drawer, turn the knob on, push the plate, put
 the bowl in a drawer it opens. The four objects stand in the table's places, each in every place
@@ -208,7 +208,7 @@ def demo(skills: Skills, spec: EpisodeSpec) -> None:
     else:
         if program == "place_in":
             skills.pull_open(place, _DRAWER_SLOT)
-        skills.grasp(spec.task.params["object"])
+        skills.grasp(spec.task.params["object"], onto=place)
         skills.lift(_DRAWER_LIFT if program == "place_in" else 0.1)
         skills.place(place)
 
@@ -276,7 +276,7 @@ def _task(cfg: ReferentConfig, problem: libero.Problem) -> tuple[str, str, str] 
 def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
     """A LIBERO-Goal task's own scene, if its goal is one of ours: its objects under LIBERO's instance
     names, LIBERO's instruction, and a swap to each other place the task may name (the object's other
-    places; the other drawer); None for the tasks our skills cannot do (the wine bottle's)."""
+    places; the other drawer); None for a task our skills cannot do."""
     task = _task(cfg, problem)
     if task is None:
         return None
