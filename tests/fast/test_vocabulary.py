@@ -72,5 +72,7 @@ def test_libero_goal_holds_out_a_place_and_names_what_it_accepts() -> None:
     assert all(o.name != "stove" for spec in specs for o in spec.objects)
     with pytest.raises(ReferentSpecError) as refused:
         load("libero_goal", overrides={"targets": ["sink"]})
-    accepts = "bowl, cabinet, cream cheese, front of the stove, middle drawer, plate, rack, stove, stove knob, top drawer, wine bottle"
+    accepts = (
+        "bowl, cabinet, cream cheese, front of the stove, middle drawer, plate, rack, stove, stove knob, top drawer, wine bottle"
+    )
     assert f"'sink' names no object of this referent; it accepts: {accepts}" in str(refused.value)
