@@ -115,10 +115,12 @@ class Skills(Clearance):
         above, down = [over[0], over[1], carry_z], [over[0], over[1], release_z]
         yaw = self.yaw if rim else self._release_yaw(above, down, destination_id)  # a turned bowl would hang elsewhere
         across = self._path_to(above, yaw)
-        # Up first where the way across, still rising, would pass near a standing object, or a
-        # hanging bowl could swing into furniture.
-        if rim or self._gap(across[1], destination_id) < CARRY_MARGIN:
-            self.move_to([*self.scene.ee_pos()[:2], carry_z])
+        # Up first where the way across, still rising, would pass near a standing object, a hanging
+        # bowl could swing into furniture, or a bottle hanging by its neck pass under the cabinet's
+        # top (where the hand reaches that high: from the table's far corner it crosses on the rise).
+        up = [*self.scene.ee_pos()[:2], carry_z]
+        if rim or (self.gentle and self._reachable(up)) or self._gap(across[1], destination_id) < CARRY_MARGIN:
+            self.move_to(up)
             across = self._path_to(above, yaw)
         self._follow(*across, yaw)
         if rim:  # straight down from where the hand is
@@ -165,12 +167,17 @@ class Skills(Clearance):
         inner = self._kind(destination_id).inner
         for step in np.arange(0.0, inner / np.max(np.abs(toward)), REACH_STEP):
             point = np.append(over[:2] + step * toward, over[2])
-            try:
-                self.ik.solve(np.append(point[:2], height), self.yaw, seed=self.q)
-            except IKError:
-                continue
-            return point
+            if self._reachable(np.append(point[:2], height)):
+                return point
         return over
+
+    def _reachable(self, pos: list[float] | np.ndarray) -> bool:
+        """Whether the hand, pointing down at its yaw, reaches `pos`."""
+        try:
+            self.ik.solve(np.asarray(pos, float), self.yaw, seed=self.q)
+        except IKError:
+            return False
+        return True
 
     def push(self, object_id: str, distance: float = 0.09, speed: float = 0.12) -> None:
         """Slide the object along the table (away from the robot) with the closed fingers.
