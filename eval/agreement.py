@@ -1,6 +1,6 @@
 """Does a policy do the same in our rebuild of a LIBERO world as in LIBERO's own simulator?
 
-    python -m eval.agreement exam=<exam> ours=<report folder> libero=<report folder> [out=<json>]
+    python -m eval.agreement exam=<exam> ours=<report folder> libero=<report folder> [out=<json>] [overwrite=true]
 
 Takes two takes of one exam by one policy, one in our simulator and one with `sim=libero` (their
 `rollouts.parquet`), and says, per face, the rate in each (with the interval that resamples
@@ -8,6 +8,15 @@ trials) and, rollout by rollout from the same initial state, how often the two a
 lands on the same alternative (or on none in both), a task, occ or nonsense row has the same
 outcome. It also counts how often LIBERO's own verdict on a row (`sim_success`, its `In`/`On`
 predicates) agrees with our scorer's on the same LIBERO rollout.
+
+Before anything is computed it checks, from what each take recorded (its rollouts.parquet's
+metadata, else its report.json), that the two are what they claim, and refuses in one line (exit 2)
+otherwise: `ours` must have run in our simulator and `libero` in LIBERO's (`simulator`), they must
+be two folders, by the same policy, and both of the given exam (the digest of its files, which
+takes record since `exam_digest` existed). A take from before then is accepted with a warning
+(on stderr): each of its rows' initial state is still checked against the exam's, but not that it
+is the same exam; retake it for that. `out=` is checked first too: a file there is replaced only
+with `overwrite=true`, and never one of the takes' own files.
 """
 
 from __future__ import annotations
@@ -21,10 +30,12 @@ from pathlib import Path
 import pandas as pd
 
 from core.exam import Exam, ExamError, read
-from core.products import ROLLOUTS
+from core.products import REPORTS, ROLLOUTS
 from core.rates import Rate
+from eval.baseline import exam_digest
 from eval.score import SIM_SUCCESS, LogError, clustered_rate, judge, landed, parsed_logs, read_logs, score
 from jobs.cli import UserError, main
+from jobs.output import check_writable
 
 FACES = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense", "switch_obeyed", "switch_blind")
 
@@ -64,6 +75,7 @@ def compare(exam: Exam, ours_logs: pd.DataFrame, libero_logs: pd.DataFrame, poli
     return {
         "policy": policy,
         "exam": ours["exam"],
+        "simulator_versions": {"ours": ours["simulator_versions"], "libero": theirs["simulator_versions"]},
         "faces": {f: {"ours": ours["faces"][f], "libero": theirs["faces"][f]} for f in FACES if f in ours["faces"]},
         "sim_success": theirs.get("sim_success", {}),
         "paired": paired,
@@ -79,6 +91,8 @@ def lines(result: dict) -> list[str]:
         return f"{r['rate']:.1%} ({r['k']}/{r['n']}; {lo:.0%}-{hi:.0%})"
 
     out = [f"{result['policy']} on {result['exam']}: ours | LIBERO's own simulator"]
+    ran = {k: ", ".join(f"{p} {v}" for p, v in got.items()) or "not recorded" for k, got in result["simulator_versions"].items()}
+    out.append(f"  ran on: {ran['ours']} | {ran['libero']}")
     out += [f"  {f:<12} {rate(v['ours']):<28} {rate(v['libero'])}" for f, v in result["faces"].items()]
     for kind, r in result["paired"].items():
         if r:
@@ -96,19 +110,92 @@ class AgreementOptions:
     ours: str  # the report folder of the take in our simulator (its rollouts.parquet)
     libero: str  # the report folder of the take with sim=libero
     out: str | None = None  # write the comparison (JSON) here
+    overwrite: bool = False  # replace the file already at `out`
+
+
+def check_out(out: Path, overwrite: bool, takes: list[Path]) -> None:
+    """Before anything is computed: `out` must be a file that can be written, not an existing one
+    unless `overwrite`, and never one of the takes' own files (their reports and logs)."""
+    if out.is_dir():
+        raise UserError(f"out={out} is a folder; name the JSON file to write (e.g. out={out / 'agreement.json'})")
+    own = {(take / name).resolve() for take in takes for name in (*REPORTS, ROLLOUTS)}
+    if out.resolve() in own:
+        raise UserError(f"out={out} is one of the takes' own files, which the comparison would replace: choose another out")
+    if out.exists() and not overwrite:
+        raise UserError(f"out={out} already exists; pass overwrite=true to replace it, or choose another out")
+    check_writable(out)
+
+
+class Take:
+    """What a take's folder records about itself: its logs, and who took it, where and on which exam."""
+
+    def __init__(self, option: str, folder: Path) -> None:
+        self.option, self.folder = option, folder
+        self.logs, policy = read_logs(folder / ROLLOUTS)
+        try:  # what the report says, for anything its rollouts.parquet does not record
+            report = json.loads((folder / "report.json").read_text())
+        except (OSError, ValueError):
+            report = {}
+        report = report if isinstance(report, dict) else {}
+        self.policy = policy or report.get("policy")
+        self.sim = self.logs.attrs.get("sim") or report.get("simulator")
+        self.exam = self.logs.attrs.get("exam_digest") or report.get("exam_digest")
+
+
+def check_takes(exam: Exam, ours: Take, libero: Take) -> list[str]:
+    """Refuse (UserError) two takes that are not this exam's take in our simulator and in LIBERO's by
+    one policy; returns the warnings for takes that predate the exam digest."""
+    if ours.folder.resolve() == libero.folder.resolve():
+        raise UserError(f"ours= and libero= are the same folder ({ours.folder}): give the take in each simulator")
+    for take, wanted in ((ours, "ours"), (libero, "libero")):
+        if take.sim != wanted:
+            where = f"ran in simulator {take.sim!r}" if take.sim and take.sim != "not recorded" else "records no simulator"
+            hint = " (are ours= and libero= swapped?)" if take.sim in ("ours", "libero") else ""
+            raise UserError(f"{take.option}={take.folder} {where}, not {wanted!r}: give a take with sim={wanted}{hint}")
+    for take in (ours, libero):
+        if not take.policy:
+            raise UserError(f"{take.option}={take.folder} records no policy; retake it with python -m eval")
+    if ours.policy != libero.policy:
+        raise UserError(
+            f"the takes are by different policies (ours={ours.policy!r}, libero={libero.policy!r}): compare one policy's takes"
+        )
+    digest, warnings = exam_digest(exam), []
+    for take in (ours, libero):
+        if take.exam is None:
+            warnings.append(
+                f"warning: {take.option}={take.folder} does not record which exam it took (taken before takes recorded it): "
+                f"its rows start as exam={exam.root}'s do, but only a retake shows it is that exam"
+            )
+        elif take.exam != digest:
+            raise UserError(
+                f"{take.option}={take.folder} was taken on another exam (digest {take.exam[:12]}, exam={exam.root} is "
+                f"{digest[:12]}): give takes of this exam"
+            )
+    return warnings
 
 
 def run(options: AgreementOptions) -> None:
+    out = Path(options.out) if options.out else None
+    if out is not None:
+        check_out(out, options.overwrite, [Path(options.ours), Path(options.libero)])
     try:
         exam = read(options.exam)
-        ours, policy = read_logs(Path(options.ours) / ROLLOUTS)
-        theirs, _ = read_logs(Path(options.libero) / ROLLOUTS)
-        result = compare(exam, ours, theirs, policy or "unknown")
+        ours, libero = Take("ours", Path(options.ours)), Take("libero", Path(options.libero))
+        for warning in check_takes(exam, ours, libero):
+            print(warning, file=sys.stderr)
+        result = compare(exam, ours.logs, libero.logs, ours.policy)
     except (ExamError, LogError) as exc:
         raise UserError(str(exc)) from None
     print("\n".join(lines(result)))
-    if options.out:
-        Path(options.out).write_text(json.dumps(result, indent=2))
+    if out is not None:
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            staged = out.with_name(f".{out.name}.tmp")
+            staged.write_text(json.dumps(result, indent=2))
+            staged.replace(out)
+        except OSError as exc:
+            raise UserError(f"cannot write out={out} ({exc.strerror or exc})") from None
+        print(f"wrote {out}")
 
 
 if __name__ == "__main__":

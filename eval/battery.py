@@ -8,12 +8,14 @@ same rollouts, run once per exam and kept in the cache (`shortcut_baseline`).
 A take runs for hours on a canonical exam, so every finished rollout is kept at once, one file
 each, in a partial run beside `out` (gen/partial.py, locked while a take works on it): an
 interrupted take loses only the rollouts in flight, and `resume` runs only the missing ones, to
-the same report. The reports reach `out` only when every rollout is done.
+the same report. The reports reach `out` only when every rollout is done; a take that fails
+before any rollout is finished leaves no partial run behind.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import multiprocessing
 import os
 import signal
@@ -31,11 +33,12 @@ from core.exam import Exam, read
 from core.products import REPORTS, ROLLOUTS
 from core.spec import EpisodeSpec
 from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
+from eval.libero_sim import versions
 from eval.policies import Policy
 from eval.registry import make
 from eval.report import write_reports
 from eval.rollout import OurSim, Runner, Sim
-from eval.score import BASELINE_MEASURED, POLICY_KEY, SIM_KEY, read_logs, score
+from eval.score import BASELINE_MEASURED, EXAM_KEY, POLICY_KEY, PREDICTION_KEY, SIM_KEY, VERSIONS_KEY, read_logs, score
 from jobs.partial import Partial
 from jobs.processes import die_with
 
@@ -119,6 +122,10 @@ def take(
             raise KeyboardInterrupt(
                 f"interrupted: {kept} of {len(ids)} rollouts kept in {partial.root}{during}; rerun with resume=true to continue"
             ) from None
+        except Exception:
+            if not partial.saved():  # nothing to resume: an empty partial run would only block the rerun
+                partial.finish()
+            raise
         out.mkdir(parents=True, exist_ok=True)
         for name in REPORT_FILES:  # each file replaced in one rename; anything else in `out` stays
             (partial.root / "report" / name).replace(out / name)
@@ -183,9 +190,20 @@ def _report(
     staged = kept / "report"
     staged.mkdir(parents=True, exist_ok=True)
     table = pa.Table.from_pylist(logs)
-    pq.write_table(table.replace_schema_metadata({POLICY_KEY: policy.name.encode(), SIM_KEY: sim.encode()}), staged / ROLLOUTS)
+    # who acted, where, on which exam (its digest: eval.agreement refuses takes of another), and whether
+    # the policy's predictions come from a trained head, where it says (train/policy.py CheckpointPolicy)
+    meta = {
+        POLICY_KEY: policy.name.encode(),
+        SIM_KEY: sim.encode(),
+        VERSIONS_KEY: json.dumps(versions(sim)).encode(),
+        EXAM_KEY: exam_digest(exam).encode(),
+    }
+    trained = getattr(policy, "prediction_trained", None)
+    if trained is not None:
+        meta[PREDICTION_KEY] = b"true" if trained else b"false"
+    pq.write_table(table.replace_schema_metadata(meta), staged / ROLLOUTS)
     logged, _ = read_logs(staged / ROLLOUTS)
-    report = score(dataclasses.replace(exam, trials=rows.reset_index(drop=True)), logged, policy.name)
+    report = score(dataclasses.replace(exam, trials=rows.reset_index(drop=True)), logged, policy.name, len(exam.trials))
     if baseline and policy.name == SHORTCUT:
         store_baseline(exam, list(rows["row"]), report["faces"])
         report["baseline"] = report["faces"]

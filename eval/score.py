@@ -13,8 +13,13 @@ threshold (5 cm; ties land nowhere).
 
 report.json schema (version 2):
   policy, simulator (where the rollouts ran: `ours`, `libero` (LIBERO's own, `sim=libero`), or
-      `not recorded` for logs written elsewhere), exam (its label: `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam
-      `LIBERO-<Suite> canonical exam: ...`), referent, rollouts, trials
+      `not recorded` for logs written elsewhere), simulator_versions ({mujoco, robosuite, and for
+      `libero` libero: the packages it ran on}; {} where the logs do not say), exam (its label:
+      `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam `LIBERO-<Suite> canonical exam: ...`),
+      exam_digest (sha256 of the exam's files, eval/baseline.py
+      exam_digest: which exam this is, whatever folder holds it), referent, rollouts (those scored),
+      exam_rollouts (the exam's rollouts: more than `rollouts` for a partial take, `python -m eval
+      rows=N`), trials (those scored)
   faces.<face> = {k, n, rate, ci: [lo, hi], ci_trials: [lo, hi], chance, by_level} for task
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
       (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
@@ -32,6 +37,10 @@ report.json schema (version 2):
   grounding = {k, n, rate, ci, ci_trials, chance} for policies that predict where the named
       object is (a `located` column in the logs): swap rollouts whose first-frame prediction is
       nearest the newly named object, whatever the arm then did
+  prediction_trained = whether the policy's predictions come from a trained head, where the take
+      knows (`python -m eval` records its policy's `prediction_trained`): false for a tiny-policy
+      checkpoint trained with point_weight 0 (or before it existed), whose pointer map was never
+      taught anything, so its `prediction` rows are no prediction; absent where unknown
   prediction = {name, original, task, occ: {k, n, rate, ci, ci_trials, chance}} for policies that
       predict where their motion will go (a `predicted` column: [column, row] in the agentview
       frame, with the first action chunk): the object the point falls on in the exam's map of that
@@ -45,6 +54,9 @@ report.json schema (version 2):
   distances = {n, median_to_named, median_to_original, grazing (closest approach to either in
       (2, 5] cm), by_threshold: {"0.02": {obeyed_name, true_target}, "0.05": {...}},
       threshold_robust (the verdict against chance is the same at both thresholds),
+      against_chance: {"0.02": v, "0.05": v} (obeyed_name's verdict against its chance at each
+      threshold: `above` or `below` where both its intervals, Wilson's and the trials-resampled, lie
+      above or below it, else `overlaps`; the report's verdict judges the headline the same way),
       to_named, to_original (each swap rollout's closest approach, metres),
       histogram: {edges, to_named, to_original} (counts per distance bin)}
   per_slot / per_object = {value: {task, obeyed_name}} (rates of the asked-for slot or value, with both
@@ -71,16 +83,20 @@ import pyarrow.parquet as pq
 
 from core import contact, worlds
 from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, ExamError, decode_objects, read
+from core.products import EXAM_PATH
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
 from core.success import BRINGS, MOTIONS, Outcome, achieved
-from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline
+from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline, exam_digest
 from jobs.cli import UserError, main
 
 # landing threshold (m) of each level, or None: the program achieved
 LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}
 HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 POLICY_KEY, SIM_KEY = b"deconfound.policy", b"deconfound.sim"  # rollouts.parquet's metadata: who acted, and where
+EXAM_KEY = b"deconfound.exam"  # ... on which exam (its digest, eval/baseline.py exam_digest); takes before it lack it
+PREDICTION_KEY = b"deconfound.prediction_trained"  # ... and whether its predictions come from a trained head (true/false)
+VERSIONS_KEY = b"deconfound.sim_versions"  # ... and the simulator's versions (JSON: {"mujoco", "robosuite", ...})
 BASELINE_MEASURED = f"`{SHORTCUT}` on the same rows, in our simulator (python -m eval measures it once per exam and caches it)"
 SIM_SUCCESS = "sim_success"  # rollouts.parquet's column of a simulator's own verdict (eval/rollout.py)
 PREDICTED_FACES = {"swap": "name", "task": "task", "occ": "occ"}  # faces whose first prediction is scored -> its key
@@ -252,7 +268,9 @@ def _positions(log: pd.Series) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     return ee, objects
 
 
-def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
+def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None = None) -> dict:
+    """The report of `logs` on `exam`'s rows; `exam_rollouts`: how many rollouts the whole exam
+    has, when `exam` holds only the rows a partial take ran (default: all of them)."""
     parsed = parsed_logs(logs, exam)
     faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
@@ -326,9 +344,12 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
         "version": REPORT_VERSION,
         "policy": policy,
         "simulator": logs.attrs.get("sim", "not recorded"),
+        "simulator_versions": logs.attrs.get("sim_versions", {}),
         "exam": exam_label(exam),
+        "exam_digest": exam_digest(exam) if (exam.root / EXAM_PATH).is_file() else None,  # None: an exam held in memory only
         "referent": exam.meta["referent"],
         "rollouts": len(exam.trials),
+        "exam_rollouts": len(exam.trials) if exam_rollouts is None else exam_rollouts,
         "trials": int(exam.trials["trial"].nunique()),
         "faces": {name: _face(entries) for name, entries in faces.items()},
         "init_value": {
@@ -337,12 +358,17 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str) -> dict:
         },
         "reach_probe": dict(probe),
         "distances": _distances(
-            distances, by_threshold, float(np.mean([e["chance"] for e in faces.get("obeyed_name", [])] or [0.0]))
+            distances,
+            by_threshold,
+            float(np.mean([e["chance"] for e in faces.get("obeyed_name", [])] or [0.0])),
+            [e["trial"] for e in faces.get("obeyed_name", [])],
         ),
         "per_slot": _rates(per_slot),
         "per_object": _rates(per_object),
         "errors": errors,
     }
+    if "prediction_trained" in logs.attrs:
+        report["prediction_trained"] = logs.attrs["prediction_trained"]
     if judged_by_sim:
         report["sim_success"] = {face: clustered_rate(*zip(*entries)) for face, entries in judged_by_sim.items()}
     if grounding:
@@ -412,23 +438,26 @@ def _probe(judged: dict, asked: tuple[str, str]) -> str:
     return "went_distractor" if judged[closest]["distance"] <= LANDING else "neither"
 
 
-def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: float) -> dict:
+def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: float, trials: list[int]) -> dict:
     if not pairs:
         return {"n": 0}
     named, original = np.array(pairs).T
     closest = np.minimum(named, original)
     lo, hi = REACH_THRESHOLDS
-    verdicts = set()
-    for outcomes in by_threshold.values():
-        r = Rate(sum(outcomes["obeyed_name"]), len(outcomes["obeyed_name"]))
-        verdicts.add((r.ci[0] > chance, r.ci[1] < chance))
+    from eval.report import against_chance  # the report's verdict judges the headline by the same rule
+
+    against = {
+        str(t): against_chance(clustered_rate([float(v) for v in outcomes["obeyed_name"]], trials), chance)
+        for t, outcomes in by_threshold.items()
+    }
     return {
         "n": len(pairs),
         "median_to_named": round(float(np.median(named)), 4),
         "median_to_original": round(float(np.median(original)), 4),
         "grazing": int(np.sum((closest > lo) & (closest <= hi))),
         "by_threshold": {str(t): {k: Rate(sum(v), len(v)).to_dict() for k, v in d.items()} for t, d in by_threshold.items()},
-        "threshold_robust": len(verdicts) == 1,
+        "threshold_robust": len(set(against.values())) == 1,
+        "against_chance": against,
         "to_named": [round(float(v), 4) for v in named],
         "to_original": [round(float(v), 4) for v in original],
         "histogram": {
@@ -489,6 +518,12 @@ def read_logs(path: Path) -> tuple[pd.DataFrame, str | None]:
     logs = table.to_pandas()
     if SIM_KEY in meta:
         logs.attrs["sim"] = meta[SIM_KEY].decode()
+    if EXAM_KEY in meta:
+        logs.attrs["exam_digest"] = meta[EXAM_KEY].decode()
+    if PREDICTION_KEY in meta:
+        logs.attrs["prediction_trained"] = meta[PREDICTION_KEY] == b"true"
+    if VERSIONS_KEY in meta:
+        logs.attrs["sim_versions"] = json.loads(meta[VERSIONS_KEY])
     policy = meta.get(POLICY_KEY)
     return logs, policy.decode() if policy else None
 

@@ -130,7 +130,7 @@ class CheckOptions:
 def run(options: CheckOptions) -> None:
     root = Path(options.dataset)
     if not root.is_dir():
-        raise UserError(f"{root} is not a folder")
+        raise UserError(f"{root} is not a folder" if root.exists() else f"{root} does not exist")
     product = product_in(root)
     if product == "exam":
         raise UserError(

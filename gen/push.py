@@ -146,7 +146,7 @@ class PushOptions:
 def run(options: PushOptions) -> None:
     root = Path(options.root)
     if not root.is_dir():
-        raise UserError(f"{root} is not a folder")
+        raise UserError(f"{root} is not a folder" if root.exists() else f"{root} does not exist")
     try:
         check_repo_id(options.repo_id)
     except PushError as exc:

@@ -94,7 +94,7 @@ class VerifyOptions:
 def run(options: VerifyOptions) -> None:
     root = Path(options.dataset)
     if not root.is_dir():
-        raise UserError(f"{root} is not a folder")
+        raise UserError(f"{root} is not a folder" if root.exists() else f"{root} does not exist")
     if options.episodes < 1:
         raise UserError(f"episodes must be at least 1, got {options.episodes}")
     try:

@@ -6,8 +6,9 @@ as a dataclass (a trailing `# comment` on a field is its help) and hands it with
 
 * `--help` (or `-h`, `help`) prints the usage, the docstring's first paragraph and every option
   with its default and help, and exits 0;
-* bad input — an unknown or malformed option, a wrong type, a missing required value, anything
-  the command raises as `UserError` — prints one line `error: ...` and exits 2, before any work;
+* bad input — an unknown or malformed option, a wrong type, a missing required value, an empty
+  `out=`, anything the command raises as `UserError` — prints one line `error: ...` and exits 2,
+  before any work;
 * a run that fails (`Failed`) prints one line and exits 1; Ctrl-C exits 130.
 
 Parsing is Hydra's override grammar (`key=value`, `a.b=value`, `'list=[x,y]'`), so values are
@@ -57,9 +58,24 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
     try:
         with initialize(version_base=None, config_path=None):
             cfg = compose(config_name=name, overrides=argv)
-        return OmegaConf.to_object(cfg)
+        options = OmegaConf.to_object(cfg)
     except (HydraException, OmegaConfBaseException, ValueError, TypeError) as exc:
         raise UserError(_one_line(exc, schema)) from None
+    _refuse_empty_out(options, seen)
+    return options
+
+
+def _refuse_empty_out(options: object, given: dict[str, str]) -> None:
+    """An `out=` given empty (as `--help` shows an option without a default) would be the path "", the
+    current folder: refused, as a missing value is, rather than written there."""
+    for key in given:
+        if key != "out" and not key.endswith(".out"):
+            continue
+        value: Any = options
+        for part in key.split("."):
+            value = getattr(value, part, None)
+        if isinstance(value, str) and not value.strip():
+            raise UserError(f"{key}= is empty, which would mean the current folder: name one ({key}=<folder>) or drop the option")
 
 
 def _list_options(schema: type) -> set[str]:

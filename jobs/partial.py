@@ -85,11 +85,12 @@ class Partial:
                     shutil.rmtree(entry)
                 else:
                     entry.unlink()
+        run = json.loads(json.dumps(run))  # as the record holds it (tuples as lists)
         if record.is_file():
             previous = json.loads(record.read_text())
             if previous != run:
-                changed = sorted(k for k in run if previous.get(k) != run[k])
-                raise UserError(f"resume=true, but the interrupted run at {self.root} used other options ({', '.join(changed)})")
+                changed = "; ".join(changes(previous, run)) or "its record differs"
+                raise UserError(f"resume=true, but the interrupted run at {self.root} used other options ({changed})")
         else:
             self.items.mkdir(exist_ok=True)
             tmp = record.with_suffix(".tmp")
@@ -144,6 +145,36 @@ class Partial:
         if self._lock is not None:
             os.close(self._lock)
             self._lock = None
+
+
+UNSET = object()
+
+
+def changes(before: dict, now: dict, prefix: str = "") -> list[str]:
+    """What differs between two run records, option by option (a nested record's by dotted key), an
+    option on one side only included: `key was X, now Y`."""
+    found = []
+    for key in sorted(set(before) | set(now)):
+        old, new = before.get(key, UNSET), now.get(key, UNSET)
+        if old == new:
+            continue
+        if isinstance(old, dict) and isinstance(new, dict):
+            found += changes(old, new, f"{prefix}{key}.")
+        else:
+            found.append(f"{prefix}{key} was {_shown(old)}, now {_shown(new)}")
+    return found
+
+
+def _shown(value: Any) -> str:
+    """A recorded value, briefly: long lists by their ends and length, long texts by their start and length."""
+    if value is UNSET:
+        return "unset"
+    if isinstance(value, list) and len(value) > 4:
+        return f"[{_shown(value[0])}, {_shown(value[1])}, ..., {_shown(value[-1])}] ({len(value)} items)"
+    text = json.dumps(value, sort_keys=True)
+    if len(text) > 40:
+        return f"{text[:30]}... ({len(value) if isinstance(value, str) else len(text)} characters)"
+    return text
 
 
 def completed(out: Path) -> dict | None:

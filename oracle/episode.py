@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core import contact
 from core.demo import DemoScript
 from core.spec import EpisodeSpec
 from core.success import BRINGS, Outcome, succeeded
@@ -89,15 +88,25 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
     return measure(scene, start)
 
 
+MOVED = 0.01  # m: how far the thing a program acts on must move before the hand counts as holding it
+
+
 def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
-    """The first action of `demo` at whose start the hand is within `within` of where it meets the
-    episode's target (its grasp point; the release point over a destination): where the approach
-    has committed. None if it never comes so near."""
+    """The first action of `demo` at whose start the hand is within `within` of where it takes hold
+    of what it acts on first: the object it carries somewhere, else the target (a grocery, a drawer,
+    the knob). Where it takes hold is the hand's position when that thing first moves, whatever the
+    skill (a grasp, a push, a pull on a handle, a turn). There the approach has committed, and a new
+    instruction still means a course to change: nothing is held yet. None if the thing never moves
+    or the hand never comes so near before it does."""
     spec = demo.spec
-    kind = scene.world.kind(spec.object(spec.target).kind)
-    carried = scene.world.kind(spec.object(spec.task.params["object"]).kind) if spec.task.program in BRINGS else None
-    for t, state in enumerate(demo.states):
+    first = spec.task.params["object"] if spec.task.program in BRINGS else spec.target
+    path = []
+    for state in demo.states:
         scene.set_physics_state(state)
-        if float(contact.distance(kind, scene.object_pos(spec.target), scene.ee_pos(), carried)) < within:
-            return t
-    return None
+        path.append((scene.ee_pos().copy(), scene.object_pos(first).copy()))
+    start = path[0][1] if path else None
+    moved = next((t for t, (_, at) in enumerate(path) if np.linalg.norm(at - start) > MOVED), None)
+    if moved is None:
+        return None
+    hold = path[moved][0]
+    return next((t for t, (ee, _) in enumerate(path[:moved]) if np.linalg.norm(ee - hold) < within), None)

@@ -78,9 +78,13 @@ class CheckpointPolicy:
         import torch
 
         try:
-            self.model, _ = load(path)
+            self.model, record = load(path)
         except CheckpointError as exc:
             raise PolicyError(str(exc)) from None
+        # the pointer is a prediction only where training taught it (point_weight > 0; runs before
+        # point_weight existed had none); a record without its training config (a resume state) does not say
+        train = record.get("train")
+        self.prediction_trained = float(train.get("point_weight") or 0) > 0 if isinstance(train, dict) else None
         torch.set_num_threads(1)
         self.name = f"ckpt:{path}"
         self.replan = min(replan, self.model.config.chunk)

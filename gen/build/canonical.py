@@ -40,6 +40,7 @@ import numpy as np
 from core import exam, libero, worlds
 from core.layout import STATE_KEY, TASK_KEY, layout
 from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings, yaw_of
+from gen.build.exam import take_hint
 from gen.config import check_seed
 from gen.planning.audit import audit
 from jobs.cli import UserError
@@ -307,7 +308,7 @@ def build(options: CanonicalOptions) -> None:
     suite, out = _options(options)
     from tqdm import tqdm
 
-    from gen.build.exam import first_frame, switch_step
+    from gen.build.exam import first_frame, switch_rows
     from oracle.ik import ArmIK
     from oracle.render import Cameras
     from oracle.scene import scene_for
@@ -324,7 +325,7 @@ def build(options: CanonicalOptions) -> None:
     scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
     ik = ArmIK(np.asarray(world.robot_home), world.name)
     cameras = Cameras(scene, sim.image_size, sim.cameras)
-    rows, specs = [], []
+    rows, specs, without = [], [], {}
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
     for task in suite.tasks:
         for s in chosen[task]:
@@ -334,10 +335,10 @@ def build(options: CanonicalOptions) -> None:
             state = scene.physics_state().astype(np.float64).tolist()
             settled = scene.settled(spec)
             seen = first_frame(cameras, spec)
-            switch = switch_step(scene, ik, suite.referent, spec, state) if options.switches else None
-            rows += exam.trial_rows(
-                len(specs), spec, values, state, world.episode_steps, ee, settled, switch, options.switches, seen
-            )
+            switched, why = switch_rows(scene, ik, suite.referent, spec, state, len(specs), options.switches)
+            if why:
+                without[str(len(specs))] = why
+            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, settled, switched, seen)
             specs.append(spec)
             bar.update()
     bar.close()
@@ -345,11 +346,12 @@ def build(options: CanonicalOptions) -> None:
     report = audit(suite.referent, specs)
     with staging(out) as root:
         root.mkdir(parents=True)
-        exam.write(root, rows, _header(options, suite, profile.name, sim, chosen, report))
+        header = _header(options, suite, profile.name, sim, chosen, report)
+        exam.write(root, rows, {**header, **({exam.NO_SWITCH: without} if without else {})})
     left = f"; left out: {len(suite.left_out)} task(s) (exam.json says why)" if suite.left_out else ""
     print(
         f"wrote an exam of {len(specs)} LIBERO initial states ({len(suite.tasks)} tasks x {options.states}) of {suite.name} "
-        f"to {out} in {time.perf_counter() - started:.1f} s{left}\ntake it with: python -m eval policy=<policy> exam={out}"
+        f"to {out} in {time.perf_counter() - started:.1f} s{left}\n{take_hint(out)}"
     )
 
 

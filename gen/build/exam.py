@@ -10,6 +10,7 @@ throwaway folder and published whole.
 
 from __future__ import annotations
 
+import shlex
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -49,22 +50,28 @@ class ExamSummary:
         return (
             f"wrote an exam of {self.trials} oracle-solvable trials to {self.out} in {self.seconds:.1f} s\n"
             f"confound audit of its plan: {self.verdict}\n"
-            f"take it with: python -m eval policy=<policy> exam={self.out}"
+            f"{take_hint(self.out)}"
         )
+
+
+def take_hint(out: Path) -> str:
+    """The line that says how to take the exam at `out`, its path quoted for a shell (spaces and all)."""
+    return f"take it with: python -m eval policy=<policy> exam={shlex.quote(str(out))}"
 
 
 def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, started: float, progress: bool) -> ExamSummary:
     with staging(out) as root:
         root.mkdir(parents=True)
-        rows = _trials(cfg, planned, progress)
-        exam.write(root, rows, _header(cfg, planned, provenance))
+        rows, without = _trials(cfg, planned, progress)
+        exam.write(root, rows, {**_header(cfg, planned, provenance), **({exam.NO_SWITCH: without} if without else {})})
         summary = ExamSummary(out, len(planned.designs), time.perf_counter() - started, planned.only.audit["verdict"])
         card.write_exam(root, planned.only.referent, provenance, planned.only.audit, summary.trials)
     return summary
 
 
-def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
-    """Every trial's rollouts, each trial demonstrated by the oracle first."""
+def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> tuple[list[dict], dict[str, str]]:
+    """Every trial's rollouts, each trial demonstrated by the oracle first, and why each trial
+    without the switch rows asked for lacks them."""
     from tqdm import tqdm
 
     from gen.build.produce import DemoFailed, Producer
@@ -73,6 +80,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
     producer = Producer(referent, planned.only.sim)
     switches = 1 if cfg.switches is None else cfg.switches
     rows: list[dict] = []
+    without: dict[str, str] = {}
     for i, design in enumerate(tqdm(planned.designs, desc=f"{referent.name} exam", unit="trial", disable=not progress)):
         try:
             demo, _ = producer.demonstrate(design, i, cfg.seed, cfg.max_attempts, split="exam")
@@ -85,10 +93,12 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> list[dict]:
         values = {a.id: a.value for a in referent.alternatives(demo.spec)}
         settled = producer.scene.settled(demo.spec)
         seen = first_frame(producer.cameras, demo.spec)
-        switch = switch_step(producer.scene, producer.ik, referent, demo.spec, state) if switches else None
-        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, settled, switch, switches, seen)
+        switched, why = switch_rows(producer.scene, producer.ik, referent, demo.spec, state, i, switches)
+        if why:
+            without[str(i)] = why
+        rows += exam.trial_rows(i, demo.spec, values, state, horizon, ee, settled, switched, seen)
     producer.close()
-    return rows
+    return rows, without
 
 
 def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
@@ -98,15 +108,42 @@ def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
     return exam.encode_objects(cameras.object_indices(spec.sim.layout.agentview, ids))
 
 
-def switch_step(scene: Scene, ik: ArmIK, referent: Referent, spec: EpisodeSpec, state: list[float]) -> int | None:
-    """Where a switch row changes its instruction: the step at which the oracle, doing the trial's
-    own task from where its rollouts start (the initial state, the profile's settle steps), brings
-    the hand within SWITCH_DISTANCE of the original target (oracle/episode.py approach_step). None
-    (no switch row) where it never comes so near, or starts there: no course to switch in mid-way."""
+def switch_rows(
+    scene: Scene, ik: ArmIK, referent: Referent, spec: EpisodeSpec, state: list[float], trial: int, switches: int
+) -> tuple[tuple[exam.Switch, ...], str]:
+    """A trial's switch rows, and why any asked for is missing ("" if none is). The oracle does the
+    trial's own task from where its rollouts start (the initial state, the profile's settle steps);
+    the switch comes where its hand first comes within SWITCH_DISTANCE of where it will take hold of
+    what it acts on (oracle/episode.py approach_step). A row is kept only if the oracle, switched there, replans and
+    achieves the newly named ask, as the `oracle` policy will in the exam: a switch the privileged
+    oracle cannot finish measures nothing."""
     from oracle.episode import approach_step, demonstrate
 
-    demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), spec.sim.layout.settle_steps)
-    return approach_step(scene, demo, exam.SWITCH_DISTANCE) or None
+    if not switches:
+        return (), ""
+    choices = exam.switch_choices(trial, spec, switches)
+    if not choices:
+        return (), "no alternative to switch to (the instruction names the only candidate)"
+    settle = spec.sim.layout.settle_steps
+    demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), settle)
+    if not demo.success:
+        return (), f"the oracle does not finish the original ask from this state ({demo.failure})"
+    step = approach_step(scene, demo, exam.SWITCH_DISTANCE)
+    if step == 0:
+        return (), f"the hand starts within {exam.SWITCH_DISTANCE:.2f} m of where it takes hold: no course to change"
+    if step is None:
+        return (), "what the oracle acts on never moves in its demonstration: no approach to switch in"
+    kept, missed = [], []
+    for choice in choices:
+        target, program = spec.choice(spec.counterfactuals[choice])
+        asked = replace(spec, target=target, task=replace(spec.task, program=program))
+        then = demonstrate(scene, ik, asked, referent.demo, np.asarray(state), settle, demo.actions[:step])
+        if then.success:
+            kept.append(exam.Switch(choice, step))
+        else:
+            missed.append(f"switched at step {step} to {spec.counterfactuals[choice].instruction!r}, the oracle fails "
+                          f"({then.failure})")  # fmt: skip
+    return tuple(kept), "; ".join(missed)
 
 
 def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +68,15 @@ def _agree(exam_root: Path, tmp_path: Path, through_switch: bool = False) -> tup
     """Both simulators on the exam's first 2 trials: the same observations and the same motion."""
     mine, libero, ours, theirs = _both(exam_root, tmp_path, through_switch)
     assert mine["simulator"] == "ours" and libero["simulator"] == "libero" and not libero["errors"]
+    import mujoco
+
+    from eval.libero_sim import PYTHON
+
+    asked = [str(PYTHON), "-c", "import mujoco; print(mujoco.__version__)"]
+    theirs_mujoco = subprocess.run(asked, capture_output=True, text=True)
+    assert libero["simulator_versions"]["mujoco"] == theirs_mujoco.stdout.strip()  # what the take ran on, as it ran
+    assert mine["simulator_versions"]["mujoco"] == mujoco.__version__
+    assert f"MuJoCo {theirs_mujoco.stdout.strip()}" in (tmp_path / "libero" / "report.md").read_text()
     assert {"task", "swap_success", "occ", "nonsense", "switch"} == set(libero["sim_success"])
     assert "LIBERO's own" in (tmp_path / "libero" / "report.md").read_text()
     exam = read(exam_root)

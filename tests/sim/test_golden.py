@@ -7,7 +7,9 @@ exam's files changed when exam format 2 split the answer key out of trials.parqu
 physics, initial states and horizons are the same), and again when exams gained switch rows (a
 `switch` column; the switch step comes from the oracle's physics) and the first frame's object
 map (answers.parquet `frame_objects`, a segmentation render: pinned per processor with the
-rendered files).
+rendered files); and trials.parquet again when a switch row's horizon came to count from its
+switch and its step to be measured from where the hand takes hold (issue 49: both families
+measured alike).
 
 Only the plan is the same on every machine: the episode specs and their scene records come from
 seeded arithmetic alone. What the physics writes (actions, states, the oracle's retries, exam
@@ -56,7 +58,7 @@ SAME_ON_BOTH = {  # cases whose physics these two families write alike
         "data/chunk-000/file-000.parquet": "59680dd35e33fb3d75d3d6668f78ae5f6aec5a56",
         "meta/scenes.parquet": "ebf9d08f2aeb6712f49ee9bf1aac2e428d040df5",
     },
-    "exam": {"trials.parquet": "c657fe1e77a0f314deb327198c3c5f2ec58dab46"},  # with switch rows (the policy's side)
+    "exam": {"trials.parquet": "2c998e01e2c7848230605dd9cddc0111f7346d53"},  # switch rows' horizons from the switch
 }
 PHYSICS = {  # numeric family -> case -> first 40 hex digits of each file's sha256
     COOPERLAKE: {  # AMD EPYC with AVX-512, without OPENBLAS_CORETYPE

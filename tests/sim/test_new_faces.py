@@ -5,7 +5,8 @@ another object. The oracle replans at the switch and goes to the newly named one
 shortcut, and a policy that reads the instruction only at step 0, go on as they started. The
 schedule is in the exam: `trials.parquet` gives the step and the new instruction, the runner and
 the gymnasium env show it from that step on, and a step outside the row's horizon is refused in
-one line.
+one line. A switch row's horizon counts from its switch, and the builder keeps one only where the
+oracle finishes it, saying in exam.json why a trial has none.
 
 Prediction: a policy's first predicted point, judged by the exam's segmentation of the first
 frame: the oracle's (the object its plan acts on) follows the renamed object, `position`'s does
@@ -21,7 +22,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from core.exam import FRAME_OBJECTS, SWITCH, ExamError, read
+from core.exam import FRAME_OBJECTS, NO_SWITCH, SWITCH, ExamError, read
 from eval.battery import take
 from eval.policies import Context, Oracle
 from eval.registry import make
@@ -63,6 +64,27 @@ def test_the_oracle_replans_at_the_switch_and_the_blind_go_on(exam: Path, report
         assert faces[blind]["switch_obeyed"]["rate"] <= faces[blind]["obeyed_name"]["rate"], blind
     assert faces["first"]["switch_obeyed"]["k"] == 0 and faces["first"]["switch_blind"]["rate"] == 1.0
     assert faces["first"]["obeyed_name"]["rate"] == 1.0  # it reads the words: only what it was shown first
+
+
+def test_a_switch_rows_horizon_counts_from_the_switch(exam: Path) -> None:
+    trials = read(exam).trials
+    horizon = dict(zip(trials.query("face == 'task'")["trial"], trials.query("face == 'task'")["max_steps"]))
+    for _, row in trials.query("face == 'switch'").iterrows():
+        assert row["max_steps"] == json.loads(row[SWITCH])["step"] + horizon[row["trial"]]
+
+
+def test_a_switch_the_oracle_cannot_finish_is_left_out_saying_why(tmp_path: Path) -> None:
+    """Seed 31's first trial: switched to the bread at its step, the oracle's replanned grasp fails
+    (it did in the exam before switch rows were checked); the exam keeps no row the oracle fails,
+    and every trial has its switch row or a reason."""
+    root = make_dataset(tmp_path / "exam", "n=6", "split=exam", "seed=31", "image_size=32", "workers=1")
+    built = read(root)
+    switched = set(built.trials.query("face == 'switch'")["trial"])
+    without = built.meta.get(NO_SWITCH, {})
+    assert switched | {int(t) for t in without} == set(built.trials["trial"]) and not switched & {int(t) for t in without}
+    assert len(switched) >= 5 and all("the oracle fails" in why for why in without.values())
+    report, _ = take(built, built.trials, make("oracle"), tmp_path / "oracle", baseline=False)
+    assert report["faces"]["switch_obeyed"]["k"] == report["faces"]["switch_obeyed"]["n"] == len(switched)
 
 
 def test_the_gymnasium_env_shows_the_new_instruction_from_the_switch_step(exam: Path) -> None:

@@ -189,19 +189,26 @@ def exams(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 @pytest.mark.parametrize("referent", ["object", "goal", "verb"])
 def test_trials_parquet_gives_away_nothing_but_the_instruction(exams: dict[str, Path], referent: str) -> None:
-    """Within a trial only the instruction and the blanking differ between rows; the scene
-    withholds every answer field, and nothing in it but the object list (and the inventory of
-    kinds, the same in every trial) names an object."""
+    """Within a trial only the instruction and the blanking differ between rows (and a switch
+    row's horizon, which counts from its switch); the scene withholds every answer field, and
+    nothing in it but the object list (and the inventory of kinds, the same in every trial) names
+    an object."""
     trials = pd.read_parquet(exams[referent] / "trials.parquet")
     assert tuple(trials.columns) == (*PUBLIC_COLUMNS, SWITCH)
     shared = [c for c in trials.columns if c not in ("row", "instruction", "occluded", SWITCH)]
     assert trials["scene"].map(lambda s: json.dumps(json.loads(s)["assets"])).nunique() == 1  # the referent's inventory
     for _, rows in trials.groupby("trial"):
+        unswitched = rows[rows[SWITCH] == "{}"]
         for column in shared:
-            assert rows[column].map(lambda v: json.dumps(v, default=list)).nunique() == 1, column
+            assert unswitched[column].map(lambda v: json.dumps(v, default=list)).nunique() == 1, column
         assert rows["occluded"].sum() == 1
         switched = [json.loads(v) for v in rows[SWITCH] if v != "{}"]  # one switch row, to a swap's instruction
         assert len(switched) == 1 and switched[0]["instruction"] in set(rows["instruction"]) - {rows["instruction"].iloc[0]}
+        switch_row = rows[rows[SWITCH] != "{}"].iloc[0]
+        assert switch_row["max_steps"] == switched[0]["step"] + unswitched["max_steps"].iloc[0]
+        for column in set(shared) - {"max_steps"}:
+            same = [json.dumps(v, default=lambda a: a.tolist()) for v in (switch_row[column], unswitched[column].iloc[0])]
+            assert same[0] == same[1], column
         scene = json.loads(rows["scene"].iloc[0])
         assert (scene["target"], scene["instruction"], scene["template"], scene["counterfactuals"]) == ("", "", "", [])
         assert (scene["task"]["program"], scene["task"]["params"]) == ("", {})

@@ -91,7 +91,7 @@ def test_resume_refuses_other_options(tmp_path: Path) -> None:
     assert _gen(f"out={out}", crash="episode:1").returncode == -9
     other_args = ["n=4", "image_size=32", "seed=5", "workers=1", f"out={out}", "resume=true"]
     other = subprocess.run([sys.executable, "-m", "gen", *other_args], capture_output=True, text=True)
-    assert other.returncode == 2 and "used other options (n)" in other.stderr
+    assert other.returncode == 2 and "used other options (n was 3, now 4)" in other.stderr
 
 
 def test_resume_of_a_finished_run_is_a_no_op_and_refuses_other_options(clean: Path, tmp_path: Path) -> None:
