@@ -47,8 +47,9 @@ def demonstrate(
 ) -> Demo:
     """Run `script` from the spec's poses, or from the physics `state` (an exam trial's start),
     after `settle` steps that hold the arm still (a profile's settle steps) and the actions of
-    `prefix` (what ran before a plan changed course: the demo holds the actions after them, and
-    its IK may start from the arm's home pose where the arm's own pose leads nowhere)."""
+    `prefix` (what ran before a plan changed course: the demo holds the actions after them, which
+    first raise the hand over the objects, and its IK may start from the arm's home pose where the
+    arm's own pose leads nowhere)."""
     scene.reset(spec)
     if state is not None:
         scene.set_physics_state(state)
@@ -60,6 +61,7 @@ def demonstrate(
     skills = Skills(scene, ik, spec)
     if len(prefix):
         skills.reseed = np.asarray(spec.sim.robot_home, float)
+        skills.rise()  # a changed course leaves from above the objects, not through them
     try:
         script(skills, spec)
     except IKError as exc:

@@ -42,6 +42,13 @@ class Skills(Clearance):
         self.held, self.gentle = None, False
         super().open(steps)
 
+    def rise(self) -> None:
+        """Straight up until the hand passes over every object, where it is lower: where a plan that
+        changes course mid-approach starts, so the new way to another object sweeps nothing over."""
+        ee = self.scene.ee_pos()
+        if ee[2] < self.clearance():
+            self.move_linear([ee[0], ee[1], self.clearance()])
+
     def grasp(self, object_id: str, approach: float = 0.07, onto: str | None = None) -> None:
         """Come down on the object from above, fingers across its narrow axis, and close; to be laid
         `onto` a sloping shelf, fingers across the slope (the hand then turns it down along it)."""

@@ -140,9 +140,12 @@ def switch_rows(
         then = demonstrate(scene, ik, asked, referent.demo, np.asarray(state), settle, demo.actions[:step])
         if then.success:
             kept.append(exam.Switch(choice, step))
+            continue
+        said = spec.counterfactuals[choice].instruction
+        if not demonstrate(scene, ik, asked, referent.demo, np.asarray(state), settle).success:
+            missed.append(f"the oracle does not achieve {said!r} from this state, switched or not")
         else:
-            missed.append(f"switched at step {step} to {spec.counterfactuals[choice].instruction!r}, the oracle fails "
-                          f"({then.failure})")  # fmt: skip
+            missed.append(f"switched at step {step} to {said!r}, the oracle fails ({then.failure})")
     return tuple(kept), "; ".join(missed)
 
 
