@@ -83,7 +83,7 @@ def check(exam: Exam, policy: str) -> None:
     if missing:
         venv = PYTHON.parents[1]
         # make setup skips an environment whose stamp is there, however broken
-        again = f"rm -rf {venv} && make setup rebuilds it" if (venv / ".installed").exists() else "make setup builds it"
+        again = f"rm -rf {venv} && make setup rebuilds it" if any(venv.glob(".installed*")) else "make setup builds it"
         raise SimUnavailable(f"LIBERO's environment {venv} is incomplete ({missing}): {again}")
 
 

@@ -1,7 +1,10 @@
 """Shared fixtures (one small generated dataset per test session, made by the real pipeline) and
 the lanes, one folder each: tests/fast simulates nothing (the pure core, planning, the audit, the
-command lines: `make test-fast`, a few minutes), tests/sim runs our simulator, tests/libero checks
-LIBERO's worlds against LIBERO's own environment; `make test` runs them all."""
+command lines: `make test-fast`, a few minutes), tests/sim runs our simulator, tests/libero runs
+LIBERO's worlds. The reference checks, the tests marked `reference` (all in tests/libero), drive
+LIBERO's own environment (`.venv-libero`: its physics, its pictures, replays and exams in its
+simulator) and are long: `make test` runs every test but them, `make test-reference` runs them, and
+CI runs both."""
 
 from __future__ import annotations
 
@@ -24,6 +27,7 @@ LANES = ("fast", "sim", "libero")  # tests/<lane>/: the folder decides a test's 
 def pytest_configure(config: pytest.Config) -> None:
     for lane in LANES:
         config.addinivalue_line("markers", f"{lane}: a test of tests/{lane}/")
+    config.addinivalue_line("markers", "reference: drives LIBERO's own environment (make test-reference)")
 
 
 # The longest test files first: `make test` runs files side by side on two cores (xdist --dist

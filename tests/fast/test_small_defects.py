@@ -52,7 +52,7 @@ def test_a_libero_environment_without_its_packages_is_refused_by_the_check(
     message = str(refused.value)
     assert "\n" not in message and "make setup" in message, message
     assert "libero" in message.split("(", 1)[1] and "numpy" in message, message  # names what is missing
-    (bare_python.parents[1] / ".installed").write_text("")  # a stamp make setup would trust: it must be removed
+    (bare_python.parents[1] / ".installed-mujoco-3.17.0").write_text("")  # a stamp make setup trusts: remove it
     with pytest.raises(libero_sim.SimUnavailable, match=r"rm -rf .*\.venv-libero && make setup"):
         libero_sim.check(exam, "nothing")  # type: ignore[arg-type]
 

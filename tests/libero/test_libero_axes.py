@@ -102,6 +102,7 @@ def test_lerobot_reads_it_and_every_types_written_audit_finds_no_leak(mixed: Pat
     assert all(not record["written"]["leaks"] for record in audits.values())
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("world", sorted(set(AXES.values())))
 def test_recorded_actions_succeed_in_liberos_own_environment(mixed: Path, world: str, tmp_path: Path) -> None:
     """Each episode of the world rebuilt in LIBERO's own environment from its record alone (its
@@ -115,6 +116,7 @@ def test_recorded_actions_succeed_in_liberos_own_environment(mixed: Path, world:
     assert succeeded >= 0.9 * len(results), f"LIBERO's check_success() accepted {succeeded}/{len(results)}"
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("world", sorted(set(AXES.values())))
 def test_the_same_pictures_and_poses_at_generated_states(mixed: Path, world: str, tmp_path: Path) -> None:
     """The first PICTURE_STATES episodes of each type, each one's recorded initial state set in LIBERO's own environment

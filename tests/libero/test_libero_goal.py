@@ -54,6 +54,7 @@ def world() -> worlds.World:
     return worlds.world(SUITE)
 
 
+@pytest.mark.reference
 def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
     """Every body, joint, colliding geom, actuator and camera of LIBERO-Goal's task-0 scene has its
     twin in ours: the table, the mounted Panda, the cabinet, the stove, the wine rack, the bowl,
@@ -75,6 +76,7 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path) -> None:
     assert any(":wine_rack_1" in k for k in compared) and len(compared) > 1500
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("look", LOOKS)
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(look: str, tmp_path: Path) -> None:
     """LIBERO-Goal's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as LIBERO
@@ -90,6 +92,7 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(look: str, tm
 MOVED = {"wooden_cabinet_1_top_level": -0.16, "wooden_cabinet_1_middle_level": -0.14, "flat_stove_1_button": 1.0}
 
 
+@pytest.mark.reference
 def test_the_same_pictures_with_the_drawers_open_and_the_knob_turned(tmp_path: Path) -> None:
     """The first initial state of PICTURE_STATES tasks (docs/LIBERO.md: 5), the cabinet's top and
     middle drawers pulled out and the stove's knob turned on in both simulators: within the same
@@ -156,6 +159,7 @@ def goal_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
+@pytest.mark.reference
 def test_recorded_actions_succeed_in_liberos_own_environment(goal_dataset: Path, world: worlds.World, tmp_path: Path) -> None:
     """Each episode rebuilt in LIBERO-Goal's own scene from its record (the places on furniture are
     LIBERO's sites, not bodies), its recorded actions stepped there: LIBERO's own check_success()
@@ -199,6 +203,7 @@ def test_the_canonical_exam_is_liberos_covered_tasks(tmp_path: Path) -> None:
     assert all(f["k"] == 0 for f in faces["nothing"].values())
 
 
+@pytest.mark.reference
 def test_the_verb_axis_in_liberos_scene_replays_in_liberos_own_environment(tmp_path: Path, world: worlds.World) -> None:
     """`referent=verb world=libero_goal`: the bowl or the cream cheese picked up or pushed, the verb
     alone saying which. LIBERO has no predicate for either program, so each episode's recorded

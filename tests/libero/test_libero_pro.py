@@ -169,6 +169,7 @@ def test_no_swap_names_an_object_the_suite_parked_off_the_scene(tmp_path: Path) 
     [(name, FAST) for name in (_covered() if EVERY else SAMPLED)]
     + [(name, FULL) for name in (_covered() if EVERY else FULL_SAMPLED)],
 )
+@pytest.mark.reference
 def test_the_same_pictures_and_poses_as_liberos_own_render_of_the_suite(name: str, look: str, tmp_path: Path) -> None:
     """The first state of the suite's first tasks (its added, moved and recoloured objects
     included): both cameras within 4/255 of LIBERO's own frames, every object and fixture within

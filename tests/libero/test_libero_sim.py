@@ -109,6 +109,7 @@ def canonical(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
+@pytest.mark.reference
 def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, tmp_path: Path) -> None:
     """LIBERO's own task files and initial states: the hand and the objects follow the same paths in
     both simulators (our OSC acts as robosuite 1.4's, settle steps included), within millimetres;
@@ -128,6 +129,7 @@ def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, 
         assert a.shape == b.shape and np.abs(a - b).max() < 0.005, (row, np.abs(a - b).max())
 
 
+@pytest.mark.reference
 def test_a_libero_pro_lan_suite_hands_the_policy_the_bddl_language_line(tmp_path: Path) -> None:
     from core import libero
     from gen.build.canonical import CanonicalOptions, build
@@ -150,6 +152,7 @@ EVERY = (  # the reference check (LIBERO_SIM_ALL=1): every type in every LIBERO 
 CHECKED = EVERY if os.environ.get("LIBERO_SIM_ALL") else (("category", "libero_object"), ("color", "libero_spatial"))
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize(("referent", "world"), CHECKED)
 def test_a_generated_exam_of_a_floor_and_a_table_type_runs_in_liberos_simulator(
     referent: str, world: str, tmp_path: Path

@@ -54,6 +54,7 @@ def referent() -> registry.Referent:
     return registry.load(SUITE)
 
 
+@pytest.mark.reference
 def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Referent) -> None:
     """Every body, joint, colliding geom, actuator and camera of LIBERO-Spatial's task-0 scene has
     its twin in ours with the same physics: the table, the mounted Panda, the cabinet's drawers,
@@ -78,6 +79,7 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Refe
     assert any(":wooden_cabinet_1_top_level" in k for k in compared) and len(compared) > 1500
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("look", LOOKS)
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(look: str, tmp_path: Path) -> None:
     """LIBERO-Spatial's first initial states (PICTURE_STATES) of each of its 10 tasks, the fixtures posed as
@@ -96,6 +98,7 @@ def spatial_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
+@pytest.mark.reference
 def test_recorded_actions_succeed_in_liberos_own_environment(spatial_dataset: Path, world: worlds.World, tmp_path: Path) -> None:
     """Each episode rebuilt in LIBERO-Spatial's own scene from its record alone (LIBERO's instance
     names, poses, robot joints; the fixtures where our world stands them), its recorded actions

@@ -58,6 +58,7 @@ def referent() -> registry.Referent:
     return registry.load(SUITE)
 
 
+@pytest.mark.reference
 def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Referent) -> None:
     """Every body, joint, colliding geom, actuator and camera LIBERO's task-0 scene compiles has
     its twin in ours with the same physics (our scene holds all ten groceries; LIBERO's six)."""
@@ -74,6 +75,7 @@ def test_the_compiled_physics_is_liberos(tmp_path: Path, referent: registry.Refe
     assert len(compared) > 800  # bodies, joints, colliding geoms, actuators, two cameras, options
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("look", LOOKS)
 def test_the_same_pictures_and_poses_at_liberos_own_initial_states(look: str, tmp_path: Path) -> None:
     """LIBERO-Object's first initial states (PICTURE_STATES) of each of its 10 tasks: our frames of both cameras
@@ -93,6 +95,7 @@ def libero_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
 
 
+@pytest.mark.reference
 def test_recorded_actions_succeed_in_liberos_own_environment(libero_dataset: Path, tmp_path: Path) -> None:
     """Each episode rebuilt in LIBERO's environment from its scene record alone (LIBERO's
     instance names, poses, robot joints), its recorded 7-d actions stepped there: LIBERO's own
