@@ -180,7 +180,7 @@ def section(rows: list[dict], shortcut: dict | None, timings: dict, decided: dic
         "are k/n with the 95% interval that resamples trials; *paired* compares the two takes rollout by rollout",
         "(a swap row landing on the same grocery, or on none, in both; a task row with the same outcome). The exams",
         "were made before switch rows (`switches=0` makes the same rows). LIBERO's simulator ran on MuJoCo 3.17.0 with",
-        "robosuite 1.4.0, the default of `make setup` (LIBERO.md, \"Which MuJoCo\": under LIBERO's own 2.3.7 its frames",
+        'robosuite 1.4.0, the default of `make setup` (LIBERO.md, "Which MuJoCo": under LIBERO\'s own 2.3.7 its frames',
         "show another robot here); ours on MuJoCo 3.9.0 with robosuite 1.5.2. Takes made since name theirs in their reports.",
         "",
         "```",
