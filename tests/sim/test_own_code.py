@@ -52,8 +52,8 @@ def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path
 @pytest.mark.parametrize(
     "module, make",
     [
-        ("gen", ["referent=libero_spatial", "n=2", "split=exam", "image_size=64"]),
-        ("gen.canonical", ["world=libero_goal", "states=1", "image_size=64"]),
+        ("gen", ["referent=libero_spatial", "n=2", "split=exam", "image_size=64", "switches=0"]),  # switch: its own test
+        ("gen.canonical", ["world=libero_goal", "states=1", "image_size=64", "switches=0"]),
     ],
 )
 def test_the_readmes_own_loop_scores_a_libero_exam_whose_reset_settles(tmp_path: Path, module: str, make: list[str]) -> None:
