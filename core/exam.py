@@ -77,9 +77,8 @@ FACES = {
     "nonsense": f"instruction replaced by {NONSENSE!r}; a grounded policy should fail",
     "switch": "the original instruction, replaced at a recorded step (the oracle's hand within SWITCH_DISTANCE of where "
     "it takes hold of what it acts on first, before it does: the approach has committed) by one naming another "
-    "alternative, the "
-    "horizon counted from the switch; kept only where the oracle, switched there, achieves the new ask; obeyed = "
-    "lands on the newly named one, blind = goes on to the original",
+    "alternative, the horizon counted from the switch; kept only where the oracle, switched there, achieves the new "
+    "ask; obeyed = lands on the newly named one, blind = goes on to the original",
 }
 SWITCH = "switch"  # a public column of exams with switch rows: {"step", "instruction"} on those rows, "{}" elsewhere
 SWITCH_DISTANCE = 0.10  # m from where the hand takes hold of what it acts on first, at which the switch comes
