@@ -85,3 +85,17 @@ def paired_difference(
         "ci_trials": [round(float(lo), 4), round(float(hi), 4)],
         "n": len(first),
     }
+
+
+def widest_interval(rate: dict) -> tuple[float, float]:
+    """The wider of a rate's two 95% intervals (`ci`, Wilson's, and `ci_trials`, which resamples
+    trials): with one trial the resampled one shrinks to a point and would overstate the evidence."""
+    trials = rate.get("ci_trials") or rate["ci"]
+    return min(rate["ci"][0], trials[0]), max(rate["ci"][1], trials[1])
+
+
+def against_chance(rate: dict, chance: float) -> str:
+    """A rate against its chance: `above` (`below`) where its widest interval lies above (below)
+    it, else `overlaps`. The battery's verdicts (eval/score.py, eval/report.py) judge by this rule."""
+    lo, hi = widest_interval(rate)
+    return "above" if lo > chance else "below" if hi < chance else "overlaps"

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from core.products import REPORTS
+from core.rates import against_chance, widest_interval
 
 FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense", "switch_obeyed", "switch_blind")
 
@@ -74,32 +75,19 @@ def _short(r: dict | None) -> str:
     return f"{r['rate']:.1%} ({r['k']}/{r['n']})" if r and r["n"] else "—"
 
 
-def _interval(r: dict) -> tuple[float, float]:
-    """The wider of a rate's two 95% intervals (Wilson's, and the one that resamples trials)."""
-    trials = r.get("ci_trials") or r["ci"]
-    return min(r["ci"][0], trials[0]), max(r["ci"][1], trials[1])
-
-
-def against_chance(rate: dict, chance: float) -> str:
-    """A rate against its chance (eval/score.py distances.against_chance, and the verdict): `above`
-    (`below`) where the wider of its two intervals lies above (below) it, else `overlaps`."""
-    lo, hi = _interval(rate)
-    return "above" if lo > chance else "below" if hi < chance else "overlaps"
-
-
 def verdict(report: dict) -> str:
     """One sentence from the numbers: is obeyed_name's interval above chance, and above the measured
-    shortcut's? (Each the wider of its Wilson and trials-resampled intervals, as `against_chance`.)"""
+    shortcut's? (Each the wider of its Wilson and trials-resampled intervals, as core/rates.py `against_chance`.)"""
     faces, baseline = report["faces"], (report.get("baseline") or {}).get("obeyed_name")
     obeyed = faces.get("obeyed_name")
     if not obeyed or not obeyed["n"]:
         return "Verdict: this take has no swap rows, so it cannot say whether the policy reads its instruction."
-    lo, hi = _interval(obeyed)
+    lo, hi = widest_interval(obeyed)
     vs_chance = against_chance(obeyed, obeyed["chance"])
     said = f"obeyed_name {obeyed['rate']:.1%} (95% CI {lo:.1%}–{hi:.1%}) is {AGAINST[vs_chance]}"
     said += f" ({obeyed['chance']:.0%})"
     if baseline and baseline["n"]:
-        blo, bhi = _interval(baseline)
+        blo, bhi = widest_interval(baseline)
         vs_shortcut = "above" if lo > bhi else "below" if hi < blo else "overlaps"
         said += {"above": " and above", "below": " and below", "overlaps": " and not distinguishable from"}[vs_shortcut]
         said += f" the shortcut's {baseline['rate']:.1%} ({blo:.1%}–{bhi:.1%})"

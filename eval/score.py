@@ -84,7 +84,7 @@ import pyarrow.parquet as pq
 from core import contact, worlds
 from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, ExamError, decode_objects, read
 from core.products import EXAM_PATH
-from core.rates import Rate, cluster_ci
+from core.rates import Rate, against_chance, cluster_ci
 from core.spec import EpisodeSpec
 from core.success import BRINGS, MOTIONS, Outcome, achieved
 from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline, exam_digest
@@ -444,8 +444,6 @@ def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: flo
     named, original = np.array(pairs).T
     closest = np.minimum(named, original)
     lo, hi = REACH_THRESHOLDS
-    from eval.report import against_chance  # the report's verdict judges the headline by the same rule
-
     against = {
         str(t): against_chance(clustered_rate([float(v) for v in outcomes["obeyed_name"]], trials), chance)
         for t, outcomes in by_threshold.items()
