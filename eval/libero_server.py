@@ -88,6 +88,13 @@ def positions(env: Any) -> list[list]:
     return [[name, *map(float, sim.data.body_xpos[body])] for name, body in bodies.items()]
 
 
+def articulations(env: Any) -> dict[str, float]:
+    """{joint: position} of the fixtures' own joints (a drawer's slide, the stove knob's hinge)."""
+    model, names = env.sim.model, tuple(env.env.fixtures_dict)
+    joints = (model.joint_id2name(j) for j in range(model.njnt))
+    return {j: float(env.sim.data.qpos[model.get_joint_qpos_addr(j)]) for j in joints if j and j.startswith(names)}
+
+
 def fixtures(env: Any) -> list[list]:
     """[name, x, y, z, qw, qx, qy, qz] of every fixture body: LIBERO draws their poses anew at each reset."""
     model = env.sim.model

@@ -47,7 +47,9 @@ class GenConfig:
     split: str = "train"  # train: a LeRobot dataset; exam: an exam (held-out random stream, no video)
     workers: Optional[int] = None  # processes producing episodes; default: this machine's cores
     backend: str = "process"  # process (this machine) | ray (Ray tasks; RAY_ADDRESS selects a cluster)
-    confound: Optional[str] = None  # position: target in its canonical slot; layout: a benchmark task's own scene
+    # position: target in its canonical slot; layout: a benchmark task's own scene; with a list of types,
+    # one for all of them or a list of one each ([layout,position,...]; null: that type deconfounded)
+    confound: Any = None
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's
@@ -71,9 +73,11 @@ class GenConfig:
         if isinstance(self.referent, str):
             return [self]
         shares = []
-        for item in self.referent:
+        confounds = self.confound if isinstance(self.confound, list) else [self.confound] * len(self.referent)
+        for item, confound in zip(self.referent, confounds, strict=True):
             name, world = registry.own_name(*mix.split(item))  # `object@libero_object` is libero_object
-            shares.append(replace(self, referent=name, world=world or self.world, n=self.n // len(self.referent)))
+            n = self.n // len(self.referent)
+            shares.append(replace(self, referent=name, world=world or self.world, n=n, confound=confound))
         return shares
 
 
@@ -94,6 +98,9 @@ def validate(cfg: GenConfig) -> None:
     if not isinstance(cfg.referent, str):
         _validate_mix(cfg)
         return
+    if cfg.confound is not None and not isinstance(cfg.confound, str):
+        listed = mix.listed(cfg.confound).removeprefix("referent=")
+        raise UserError(f"confound={listed} is one per type of a referent list; {cfg.referent} is one type: give one")
     world = resolve_world(cfg)
     try:
         profile = layout(cfg.profile or world.profiles[0])
@@ -155,6 +162,8 @@ def _validate_mix(cfg: GenConfig) -> None:
     names = mix.types(cfg.referent)
     if len(names) == 1:  # a list of one is that type
         cfg.referent = names[0]
+        if isinstance(cfg.confound, list) and len(cfg.confound) == 1:
+            cfg.confound = cfg.confound[0]
         validate(cfg)
         return
     listed_types = mix.listed(names)
@@ -167,6 +176,12 @@ def _validate_mix(cfg: GenConfig) -> None:
     if cfg.n <= 0:
         raise UserError(f"n must be a positive number of episodes, got {cfg.n}")
     mix.check_share(cfg.n, names)
+    if isinstance(cfg.confound, list) and len(cfg.confound) != len(names):
+        raise UserError(
+            f"confound={mix.listed(cfg.confound).removeprefix('referent=')} names {len(cfg.confound)} confounds for the "
+            f"{len(names)} types of {listed_types}: "
+            "give one for all of them, or one each (null: that type deconfounded)"
+        )
     shares = cfg.shares()
     if cfg.out is None:  # named as the progress bar names the types (`object@libero_object` is libero_object)
         own = [s.world in (None, registry.world_of(s.referent)) for s in shares]

@@ -110,6 +110,19 @@ class Motion:
             self.q = self.ik.solve(start + s * (goal - start), self.yaw, seed=self.q, facing=self.facing)
             self._execute(self.q)
 
+    def twist(self, yaw: float, speed: float = 0.8) -> None:
+        """Turn the hand about its grip site to `yaw` at `speed` rad/s (minimum-jerk timing), the
+        site kept where it is throughout: what turns a knob without pulling on its axis (a joint
+        path between two yaws swings the site off it)."""
+        start, site = self.yaw, self.scene.ee_pos()
+        steps = max(2, int(np.ceil(abs(yaw - start) / (speed * self.dt))))
+        for k in range(1, steps + 1):
+            tau = k / steps
+            s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+            self.q = self.ik.solve(site, start + s * (yaw - start), seed=self.q, facing=self.facing)
+            self._execute(self.q)
+        self.yaw = yaw
+
     def hold(self, steps: int) -> None:
         for _ in range(steps):
             self._execute(self.q)

@@ -52,7 +52,16 @@ CAMERAS = ("agentview", "robot0_eye_in_hand")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "eval"))  # the LIBERO side of sim=libero: numpy and LIBERO only
 
-from libero_server import fixtures, floor_bddl, make_env, pose_from_record, positions, table_bddl, task_bddl  # noqa: E402
+from libero_server import (  # noqa: E402
+    articulations,
+    fixtures,
+    floor_bddl,
+    make_env,
+    pose_from_record,
+    positions,
+    table_bddl,
+    task_bddl,
+)
 
 
 def _labels(env, camera: str, size: int, things: list[str]) -> np.ndarray:  # noqa: ANN001
@@ -178,9 +187,13 @@ def replay(request: dict, out: str) -> None:
             for i in indices:
                 env.reset()  # a fresh episode clock: the horizon counts per episode, as in LIBERO's evaluation
                 _pose(env, request, episodes[i])
+                hand = []
                 for action in episodes[i]["actions"]:
-                    env.step(np.asarray(action, float))
-                results[i] = {"success": bool(env.check_success()), "objects": positions(env)}
+                    obs, *_ = env.step(np.asarray(action, float))
+                    hand.append([float(v) for v in obs["robot0_eef_pos"]])
+                results[i] = {
+                    "success": bool(env.check_success()), "objects": positions(env), "joints": articulations(env), "hand": hand,
+                }  # fmt: skip
             env.close()
     with open(out, "w") as f:
         json.dump(results, f)

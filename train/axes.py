@@ -32,16 +32,15 @@ from __future__ import annotations
 import json
 import shlex
 import sys
-import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from core.exam import read
 from eval.policies import FeatureMismatch
 from gen.config import GenConfig, parse
-from jobs.cli import Failed, UserError, main
+from jobs.cli import UserError, main
 from referents import registry
-from train.stages import Ledger, cell, commit, exam_report, generate_once, recipe, train_log, value
+from train.stages import Ledger, cell, commit, exam_report, generate_once, train_once, value
 
 PARTS = ("axes", "loo", "tiers")
 AXES = ("object", "color", "category", "ordinal", "relation", "negation", "composition")
@@ -140,7 +139,7 @@ def _stages(options: AxesOptions) -> dict[str, tuple[str, GenConfig]]:
 def _train(options: AxesOptions, name: str, datasets: list[Path], steps: int, ledger: Ledger, commands: list[str]) -> dict | None:
     """Train (or continue, or reuse) the LoRA run `name` on `datasets`; its log, or None when
     it is not finished and `train=false`."""
-    from train.fit import LoraOptions, TrainConfig, fit
+    from train.fit import LoraOptions, TrainConfig
 
     ckpt = Path(options.out) / "ckpt" / name
     decay = int(round(steps * options.cool))
@@ -158,20 +157,7 @@ def _train(options: AxesOptions, name: str, datasets: list[Path], steps: int, le
         f"python -m train 'dataset=[{listed}]' policy=tiny lora.rank=16 steps={steps} decay={decay} "
         f"lr_floor={options.lr_floor} out={ckpt}"
     )
-    log = train_log(ckpt)
-    if log is not None and log["steps"] > steps:
-        raise UserError(f"{ckpt} holds a {log['steps']}-step run, more than the {steps} asked for; choose another out=")
-    if log is None or recipe(log["config"]) != recipe(asdict(cfg)):
-        if not options.train:
-            return None
-        start = time.perf_counter()
-        try:
-            fit(cfg)
-        except ValueError as exc:
-            raise Failed(f"training {ckpt}: {exc}") from None
-        ledger.spend(f"train {name}", start)
-        log = train_log(ckpt)
-    return log
+    return train_once(cfg, ledger, f"train {name}", options.train)
 
 
 def _row(report: dict, **extra: object) -> dict:

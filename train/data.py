@@ -1,12 +1,15 @@
 """Generated LeRobot datasets in memory, for training on a CPU: one, or the union of several
 (what lerobot users know as a multi-dataset).
 
-Videos are decoded once (PyAV, sequentially) into uint8 arrays and cached on disk, keyed by the
-dataset's content; decoding frame by frame through the loader would dominate every step.
+Videos are decoded once (PyAV, sequentially) into uint8 arrays cached on disk, keyed by the
+dataset's content, and read back memory-mapped (a 1,400-episode set at 128 px is 18 GB of frames:
+two such runs side by side share the page cache instead of each holding its own copy); decoding
+frame by frame through the loader would dominate every step.
 Everything a training run relies on is checked first, so a bad dataset, or datasets that
 disagree on their features, rate or frame size, fail in one line before any step is taken.
 The union's normalisation statistics are computed over all its frames (exactly, from each
-dataset's own), and each frame remembers its dataset, so batches can be balanced across them.
+dataset's own), and each frame remembers its dataset and its episode's referent type, so batches
+can be balanced across both (the types of one mixed dataset, gen/planning/mix.py, too).
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ class Frames:
     stats: dict[str, dict[str, np.ndarray]]
     target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
     target_world: np.ndarray | None  # (episodes,) the world each episode's scene is in (a mix's may differ)
+    referent: np.ndarray | None  # (episodes,) each episode's referent type (a mix's differ), from meta/scenes.parquet
     source: np.ndarray  # the dataset each frame comes from (index into `sources`)
     sources: list[str]
     profile: str
@@ -174,6 +178,7 @@ def union(parts: list[Frames]) -> Frames:
     episode_offsets = np.cumsum([0] + [len(p.starts) for p in parts])
     targets = [p.target for p in parts]
     scene_worlds = [p.target_world for p in parts]
+    referents = [p.referent for p in parts]
     # one camera at a time, dropping each part's copy as it goes: the union costs half a copy more, not two
     images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in list(parts[0].images)}
     return Frames(
@@ -188,6 +193,7 @@ def union(parts: list[Frames]) -> Frames:
         stats=_pooled({STATE_KEY: [p.state for p in parts], ACTION_KEY: [p.action for p in parts]}),
         target=None if any(t is None for t in targets) else np.concatenate(targets),
         target_world=None if any(w is None for w in scene_worlds) else np.concatenate(scene_worlds),
+        referent=None if any(r is None for r in referents) else np.concatenate(referents),
         source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
         sources=[s for p in parts for s in p.sources],
         profile=parts[0].profile,
@@ -204,15 +210,28 @@ def _pooled(vectors: dict[str, list[np.ndarray]]) -> dict[str, dict[str, np.ndar
     return out
 
 
-def sample(frames: Frames, rng: np.random.Generator, n: int, balance: bool) -> np.ndarray:
-    """`n` frame indices: uniform over all frames, or (`balance`) each from a dataset drawn
-    uniformly, so a small dataset weighs as much as a large one."""
-    if not balance or len(frames.sources) == 1:
+def groups(frames: Frames) -> np.ndarray:
+    """Each frame's balance group: its dataset and, where episodes record it, its referent type
+    (numbered in order of first appearance)."""
+    if frames.referent is None:
+        return frames.source
+    _, kind = np.unique(frames.referent, return_inverse=True)
+    pair = frames.source * (kind.max() + 1) + kind[frames.episode]
+    _, first, inverse = np.unique(pair, return_index=True, return_inverse=True)
+    return np.argsort(np.argsort(first))[inverse]
+
+
+def sample(frames: Frames, rng: np.random.Generator, n: int, balance: bool, group: np.ndarray | None = None) -> np.ndarray:
+    """`n` frame indices: uniform over all frames, or (`balance`) each from a group (`groups`: a
+    dataset, a referent type of a mix) drawn uniformly, so a small one weighs as much as a large one."""
+    group = groups(frames) if group is None and balance else group
+    if not balance or group is None or group.max() == 0:
         return rng.integers(0, len(frames), n)
-    counts = np.bincount(frames.source, minlength=len(frames.sources))
+    members = np.argsort(group, kind="stable")
+    counts = np.bincount(group)
     offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    which = rng.integers(0, len(frames.sources), n)
-    return offsets[which] + (rng.random(n) * counts[which]).astype(np.int64)
+    which = rng.integers(0, len(counts), n)
+    return members[offsets[which] + (rng.random(n) * counts[which]).astype(np.int64)]
 
 
 def _load(root: Path) -> Frames:
@@ -221,16 +240,7 @@ def _load(root: Path) -> Frames:
     tasks = dataset.tasks.sort_values("task_index")
     stats = {k: {s: np.asarray(v) for s, v in d.items()} for k, d in dataset.stats.items()}
     profile = profile_of(json.loads((root / INFO_PATH).read_text())["features"], root)
-    cache = cache_dir() / f"{_key(root)}.npz"
-    if cache.is_file():
-        with np.load(cache) as npz:
-            images = {c: npz[c] for c in profile.camera_names}
-    else:
-        images = {c: dataset.camera_frames(c) for c in profile.camera_names}
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        tmp = cache.with_suffix(".tmp.npz")
-        np.savez(tmp, **images)
-        tmp.replace(cache)
+    images = {c: _frames(dataset, c, cache_dir() / "frames" / _key(root) / f"{c}.npy") for c in profile.camera_names}
     targets = _targets(root)
     return Frames(
         images=images,
@@ -244,6 +254,7 @@ def _load(root: Path) -> Frames:
         stats=stats,
         target=targets[0] if targets else None,
         target_world=targets[1] if targets else None,
+        referent=targets[2] if targets else None,
         source=np.zeros(len(data), np.int64),
         sources=[str(root)],
         profile=profile.name,
@@ -251,9 +262,19 @@ def _load(root: Path) -> Frames:
     )
 
 
-def _targets(root: Path) -> tuple[np.ndarray, np.ndarray] | None:
-    """Start position of each episode's target object, and the world its scene is in (None for
-    datasets without scene records)."""
+def _frames(dataset: LeRobotReader, camera: str, cache: Path) -> np.ndarray:
+    """A camera's frames, memory-mapped from `cache`, decoded into it first if it is not there."""
+    if not cache.is_file():
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        tmp = cache.with_suffix(".tmp.npy")
+        dataset.camera_frames(camera, np.lib.format.open_memmap(tmp, "w+", np.uint8, dataset.camera_shape(camera))).flush()
+        tmp.replace(cache)
+    return np.load(cache, mmap_mode="r")
+
+
+def _targets(root: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Start position of each episode's target object, the world its scene is in and its referent
+    type (None for datasets without scene records)."""
     path = root / SCENES_PATH
     if not path.is_file():
         return None
@@ -263,7 +284,7 @@ def _targets(root: Path) -> tuple[np.ndarray, np.ndarray] | None:
         parsed = json.loads(scene)
         positions.append(next(o["pos"] for o in parsed["objects"] if o["id"] == target))
         scene_worlds.append(parsed.get("world", "native"))
-    return np.asarray(positions, np.float32), np.asarray(scene_worlds)
+    return np.asarray(positions, np.float32), np.asarray(scene_worlds), records["referent"].to_numpy(str)
 
 
 def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,8 @@
 """Fitting the tiny policy to a generated dataset, or to the union of several (train/data.py):
 behaviour cloning of action chunks.
 
-Each step samples frames (with several datasets, from each equally often unless
-`balance=false`), shifts the images by a few pixels (augmentation), encodes each
+Each step samples frames (with several datasets, or a dataset mixing referent types, from each
+dataset and type equally often unless `balance=false`), shifts the images by a few pixels (augmentation), encodes each
 distinct instruction of the batch once, and regresses the next `chunk` actions (L1 on
 normalised actions, masked past the episode's end). With `point_weight`, the agentview camera's
 first keypoint map is also taught where the named object is in the picture (its scene position
@@ -62,7 +62,7 @@ class LoraOptions:
 @dataclass
 class TrainConfig:
     dataset: Any = "datasets/object"  # a dataset folder, or several: 'dataset=[a,b]' trains one policy on their union
-    balance: bool = True  # with several datasets, each batch draws its frames from them equally
+    balance: bool = True  # each batch draws its frames equally from each dataset and each referent type of a mix
     out: str = "runs/train/tiny"
     policy: str = "tiny"
     finetune: str = "lora"  # lora | full | frozen
@@ -211,13 +211,14 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
         target_pixel = pixels(frames, model.config.features.mirrored)
         reaching = until_grasp(frames)
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
+    draw_from = data.groups(frames) if cfg.balance else None
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()
     while step < cfg.steps:
         if cfg.decay and step == decay_start(cfg):  # where a longer run would branch off
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
-        index = data.sample(frames, rng, cfg.batch_size, cfg.balance)
+        index = data.sample(frames, rng, cfg.batch_size, cfg.balance, draw_from)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
         shifted = {c: _shift(frames.images[c][index], cfg.shift, rng) for c in model.cameras}
         images = {c: torch.from_numpy(moved) for c, (moved, _) in shifted.items()}

@@ -19,12 +19,18 @@ import os
 import shutil
 import time
 from collections.abc import Callable
+from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from core.exam import Exam
 from gen.config import GenConfig
+from jobs.cli import UserError
+
+if TYPE_CHECKING:
+    from train.fit import TrainConfig
 
 WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights (or, of a reference policy, the exam) it was taken with
 TIMINGS = "timings.json"  # in an experiment's `out`: each stage's wall time
@@ -58,15 +64,42 @@ class Ledger:
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
-    """Generate `cfg`'s dataset or exam unless its folder already holds a finished one."""
+    """Generate `cfg`'s dataset or exam unless its folder already holds a finished one (two
+    experiment processes on one `out` that both need it: one makes it while the other waits)."""
     from gen.build.run import generate
 
     out = Path(str(cfg.out))
-    if (out / "meta").is_dir() or (out / "exam.json").is_file():
-        return
-    start = time.perf_counter()
-    generate(cfg)
-    ledger.spend(stage, start)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out.parent / f".{out.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if (out / "meta").is_dir() or (out / "exam.json").is_file():
+            return
+        start = time.perf_counter()
+        generate(cfg)
+        ledger.spend(stage, start)
+
+
+def train_once(cfg: TrainConfig, ledger: Ledger, stage: str, allowed: bool = True) -> dict | None:
+    """The log of the run `cfg` describes: trained (or continued from its last matching state) unless
+    one finished on the same recipe is there; None when it is not finished and not `allowed`."""
+    from jobs.cli import Failed
+    from train.fit import fit
+
+    ckpt = Path(cfg.out)
+    log = train_log(ckpt)
+    if log is not None and log["steps"] > cfg.steps:
+        raise UserError(f"{ckpt} holds a {log['steps']}-step run, more than the {cfg.steps} asked for; choose another out=")
+    if log is None or recipe(log["config"]) != recipe(asdict(cfg)):
+        if not allowed:
+            return None
+        start = time.perf_counter()
+        try:
+            fit(cfg)
+        except ValueError as exc:
+            raise Failed(f"training {ckpt}: {exc}") from None
+        ledger.spend(stage, start)
+        log = train_log(ckpt)
+    return log
 
 
 def train_log(ckpt: Path) -> dict | None:
@@ -93,9 +126,11 @@ def exam_report(
     ledger: Ledger,
     stage: str,
     baseline: bool = True,
+    sim: str = "ours",
 ) -> dict:
-    """The report of the checkpoint `weights` on `rows` of `exam`, taken once and read back on
-    later runs while the weights it was taken with are still the ones there."""
+    """The report of the checkpoint `weights` on `rows` of `exam`, taken once (in our simulator or,
+    `sim=libero`, in LIBERO's own) and read back on later runs while the weights it was taken with
+    are still the ones there."""
     from eval.battery import take
     from train.policy import MODEL_FILE, CheckpointPolicy
 
@@ -103,7 +138,8 @@ def exam_report(
 
     def run() -> None:
         policy = CheckpointPolicy(str(weights), replan)
-        take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options={"replan": replan})
+        options = {"replan": replan}
+        take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options=options, resume=True, sim=sim)
 
     return _once(out, digest, run, ledger, stage)
 
@@ -122,13 +158,17 @@ def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: 
 
 
 def _once(out: Path, digest: str, run: Callable[[], None], ledger: Ledger, stage: str) -> dict:
-    """`out`'s report, taken by `run` unless the one there was taken from what `digest` names."""
+    """`out`'s report, taken by `run` unless the one there was taken from what `digest` names (two
+    processes that both need it: one takes it while the other waits)."""
     stamp = out / WEIGHTS_DIGEST
-    if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
-        start = time.perf_counter()
-        run()
-        stamp.write_text(digest)
-        ledger.spend(stage, start)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out.parent / f".{out.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
+            start = time.perf_counter()
+            run()
+            stamp.write_text(digest)
+            ledger.spend(stage, start)
     return json.loads((out / "report.json").read_text())
 
 

@@ -134,8 +134,9 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
     from gen.build.produce import DemoFailed
     from gen.build.workers import Job, WorkerCrash, produce
 
-    types = tuple((one.referent, share.sim) for one, share in zip(cfg.shares(), planned.shares, strict=True))
-    job = Job(types, cfg.spec, cfg.spec_overrides(), cfg.codec, cfg.seed, cfg.max_attempts)
+    shares = zip(cfg.shares(), planned.shares, strict=True)
+    types = tuple((one.referent, one.spec_overrides(), share.sim) for one, share in shares)
+    job = Job(types, cfg.spec, cfg.codec, cfg.seed, cfg.max_attempts)
     name = mix.name([share.referent.label for share in planned.shares])
     bar = tqdm(total=len(planned.designs), initial=done, desc=name, unit="ep", disable=not progress, dynamic_ncols=True)
     failed = 0

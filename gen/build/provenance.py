@@ -96,7 +96,9 @@ class Provenance:
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
         for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look", "switches"):
             value = getattr(cfg, name)
-            if value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
+            if isinstance(value, list):  # a mix's confounds, one per type
+                parts.append((name, f"'{name}=[{','.join('null' if v is None else v for v in value)}]'"))
+            elif value is not None and value != implied.get(name, GenConfig.__dataclass_fields__[name].default):
                 parts.append((name, f"{name}={value}"))
         for name in LIST_OPTIONS:
             if getattr(cfg, name):

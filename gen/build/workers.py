@@ -35,11 +35,10 @@ class WorkerCrash(RuntimeError):
 @dataclass(frozen=True)
 class Job:
     """What a worker needs to build its own Producers: how to load each referent type (those of a
-    mix take turns, gen/mix.py) and the sim of its world."""
+    mix take turns, gen/mix.py: its name, its spec overrides, the sim of its world)."""
 
-    referents: tuple[tuple[str, SimSettings], ...]
+    referents: tuple[tuple[str, dict[str, Any], SimSettings], ...]
     spec_path: str | None
-    overrides: dict[str, Any]
     codec: str
     seed: int
     max_attempts: int
@@ -48,8 +47,8 @@ class Job:
     def producer(self, place: int) -> Producer:
         from referents import registry
 
-        name, sim = self.referents[place]
-        return Producer(registry.load(name, self.spec_path, self.overrides, sim.world), sim, self.codec)
+        name, overrides, sim = self.referents[place]
+        return Producer(registry.load(name, self.spec_path, overrides, sim.world), sim, self.codec)
 
 
 _producers: dict[int, Producer] = {}  # one per referent type, in each worker process

@@ -123,10 +123,15 @@ class LeRobotReader:
     def first_frames(self, camera: str, episodes: Iterable[int]) -> dict[int, np.ndarray]:
         return {ep: frame for ep, _, frame in self.decode(camera, episodes, limit=1)}
 
-    def camera_frames(self, camera: str) -> np.ndarray:
-        """Every frame of a camera in dataset order, (total_frames, H, W, 3) uint8."""
+    def camera_shape(self, camera: str) -> tuple[int, int, int, int]:
+        """(total_frames, H, W, 3): what `camera_frames` fills."""
         height, width, _ = self.info["features"][IMAGE_PREFIX + camera]["shape"]
-        out = np.empty((self.info["total_frames"], height, width, 3), np.uint8)
+        return (self.info["total_frames"], height, width, 3)
+
+    def camera_frames(self, camera: str, out: np.ndarray | None = None) -> np.ndarray:
+        """Every frame of a camera in dataset order, (total_frames, H, W, 3) uint8, into `out` if
+        given (e.g. a memory-mapped file: a big dataset's frames need not fit in memory)."""
+        out = np.empty(self.camera_shape(camera), np.uint8) if out is None else out
         starts = dict(zip(self.episodes["episode_index"].astype(int), self.episodes["dataset_from_index"].astype(int)))
         for ep, k, frame in self.decode(camera):
             out[starts[ep] + k] = frame

@@ -129,6 +129,7 @@ WITH_OUT = (
     "train.fit:TrainConfig",
     "train.experiment:ExperimentOptions",
     "train.axes:AxesOptions",
+    "train.release:ReleaseOptions",
 )
 
 

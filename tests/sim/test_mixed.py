@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # lerobot's own loader, before any GL context
 from PIL import Image
@@ -144,6 +145,23 @@ def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path:
     assert (lora / "adapter_config.json").is_file() and json.loads((lora / "config.json").read_text())["use_peft"]
 
 
+def test_batches_draw_each_type_of_a_mix_equally(mixed: Path) -> None:
+    """Training reads a mix's frames memory-mapped, knows each episode's type, and (balance=true)
+    draws every type equally often though their episodes differ in length."""
+    from train import data
+
+    frames = data.load(str(mixed))
+    assert all(isinstance(images, np.memmap) for images in frames.images.values())
+    assert frames.referent is not None and len(set(frames.referent)) == 7
+    drawn = frames.referent[frames.episode[data.sample(frames, np.random.default_rng(0), 7000, balance=True)]]
+    shares = [np.mean(drawn == r) for r in set(frames.referent)]
+    assert max(abs(s - 1 / 7) for s in shares) < 0.03, shares
+    uniform = frames.referent[frames.episode[data.sample(frames, np.random.default_rng(0), 7000, balance=False)]]
+    lengths = frames.ends - frames.starts
+    longest = frames.referent[int(np.argmax(lengths))]
+    assert np.mean(uniform == longest) > np.mean(drawn == longest)  # without balance, a longer type weighs more
+
+
 def test_a_picture_of_each_types_first_frame(mixed: Path) -> None:
     """scripts/first_frames.py: one tile per type, each under its instruction, written beside the
     dataset (in it, `gen ... overwrite=true` would refuse it as the user's and gen.push would upload it)."""
@@ -187,6 +205,24 @@ def test_a_mixed_plan_holds_each_types_own_plan_in_turns(tmp_path: Path) -> None
         assert share.audit["verdict"] == "no leak"
 
 
+def test_a_mix_confounds_each_type_its_own_way(tmp_path: Path) -> None:
+    """`confound=[...]` gives each type of a mix its own confound (the release's confounded arm):
+    LIBERO-Spatial's and LIBERO-Goal's tasks laid out as LIBERO lays them out, another type's
+    target in its canonical slot, a type left deconfounded; each audited as such."""
+    mixed = plan_and_audit(
+        parse(["referent=[relation@libero_spatial,goal@libero_goal,color@libero_spatial]", "n=150",
+               "confound=[layout,layout,null]", f"out={tmp_path / 'mix'}"])
+    )  # fmt: skip
+    relation, goal, color = mixed.shares
+    assert (relation.referent.config.confound, goal.referent.config.confound, color.referent.config.confound) == (
+        "layout", "layout", None,
+    )  # fmt: skip
+    assert relation.audit["leaks"] and color.audit["verdict"] == "no leak"  # the layout says which bowl
+    bowls = {tuple(sorted(o.slot for o in s.objects if o.kind == "akita_black_bowl")) for s in mixed.specs[0::3]}
+    assert len(bowls) <= 8  # LIBERO-Spatial's own pairs of places, not every pair
+    assert len({tuple((o.kind, o.slot) for o in s.objects) for s in mixed.specs[1::3]}) == 1  # LIBERO-Goal's one layout
+
+
 def test_types_of_alike_scenes_never_share_their_scenes_in_a_mix(tmp_path: Path) -> None:
     """Negation and composition lay out the same four groceries the same way: drawn from one stream
     they gave one seed's episodes identical scenes and the same target; each draws from its own."""
@@ -213,6 +249,12 @@ def test_types_of_alike_scenes_never_share_their_scenes_in_a_mix(tmp_path: Path)
         (["referent=[object,libero_object]", "n=2"], "object records profile native"),
         (["referent=[]"], "referent=[] names no referent type"),
         ([MIXED, "n=7", "split=exam"], "split=exam makes one exam per referent type"),
+        ([MIXED, "n=7", "confound=[layout,position]"], "names 2 confounds for the 7 types"),
+        (["referent=object", "n=2", "confound=[position]"], "is one per type of a referent list; object is one type"),
+        (
+            ["referent=[object@libero_object,color@libero_spatial]", "n=2", "confound=[layout,layout]"],
+            "'layout' is not defined for referent type 'color'",
+        ),
     ],
 )
 def test_bad_lists_are_refused_in_one_line(

@@ -28,7 +28,7 @@ from referents.design import Design, Placement
 from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
 from referents.schema import Candidate, ReferentConfig
 
-CONFOUNDS = ("position",)
+CONFOUNDS = ("position", "layout")
 # how far a drawer a thing goes in is pulled (m): 12 cm of it then lie uncovered; wide open, its
 # front would stand over what stands before the cabinet, the bowl to be put in it
 _DRAWER_SLOT = 0.13
@@ -166,6 +166,8 @@ def validate(cfg: ReferentConfig) -> None:
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    if cfg.confound == "layout":
+        return _as_liberos_task(cfg, balance)
     program, carried, goal = balance.pick("task", _tasks(cfg))
     others = _others(cfg, program, carried, goal)
     other = balance.pick(("other", program, carried, goal), others) if others else None
@@ -273,10 +275,41 @@ def _task(cfg: ReferentConfig, problem: libero.Problem) -> tuple[str, str, str] 
     return task if task in _tasks(cfg, displaced=False) else None
 
 
-def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
+def _as_liberos_task(cfg: ReferentConfig, balance: Balance) -> Design:
+    """`confound=layout`: a LIBERO-Goal task (each our skills can do equally often) in LIBERO's one
+    layout, as its demonstrations have it, asked with any template: where each thing stands never
+    changes, so a policy can learn each task's motion without looking."""
+    suite = worlds.world(cfg.world).suite
+    doable = [task for task in libero.tasks(suite) if _task(cfg, libero.problem(suite, task)) is not None]
+    problem = libero.problem(suite, balance.pick("task", doable))
+    scene = canonical(cfg, problem, balance.pick("template", cfg.templates))
+    assert scene is not None  # only doable tasks are picked
+    return replace(scene, placements=_apart(cfg, problem, scene.placements))
+
+
+def _apart(cfg: ReferentConfig, problem: libero.Problem, placements: tuple[Placement, ...]) -> tuple[Placement, ...]:
+    """LIBERO's layout on our table's slots, each object in a slot of its own (the canonical exam
+    may share one: LIBERO's initial states place its objects there): the nearest free one it may
+    stand in (`keep_off`), the objects nearest a slot first. The wine bottle, whose place no slot
+    is near, takes a free one; it is the same in every scene, as LIBERO's layout is."""
+    slots, taken, placed = cfg.layout.slots, set(), {}
+
+    def distance(p: Placement, slot: int) -> float:
+        x, y = problem.centre(problem.region_of(p.id))
+        return float(np.hypot(x - slots[slot][0], y - slots[slot][1]))
+
+    table = [p for p in placements if p.slot in _table_slots(cfg)]
+    for p in sorted(table, key=lambda p: min(distance(p, s) for s in _stands(cfg, p.candidate.name))):
+        slot = min((s for s in _stands(cfg, p.candidate.name) if s not in taken), key=lambda s: distance(p, s))
+        taken.add(slot)
+        placed[p.id] = replace(p, slot=slot)
+    return tuple(placed.get(p.id, p) for p in placements)
+
+
+def canonical(cfg: ReferentConfig, problem: libero.Problem, template: str | None = None) -> Design | None:
     """A LIBERO-Goal task's own scene, if its goal is one of ours: its objects under LIBERO's instance
-    names, LIBERO's instruction, and a swap to each other place the task may name (the object's other
-    places; the other drawer); None for a task our skills cannot do."""
+    names, LIBERO's instruction (or `template`'s), and a swap to each other place the task may name
+    (the object's other places; the other drawer); None for a task our skills cannot do."""
     task = _task(cfg, problem)
     if task is None:
         return None
@@ -292,14 +325,14 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
     ids = {p.candidate.name: p.id for p in placements}
 
     def say(other: str) -> str:
-        return _say(cfg, cfg.templates[0], program, carried, other)
+        return _say(cfg, template or cfg.templates[0], program, carried, other)
 
     moved = {"object": ids[carried]} if carried else {}
     return Design(
         placements=tuple(placements),
         target=ids[place],
-        template=cfg.templates[0],
-        instruction=libero.language(problem.name),
+        template=template or cfg.templates[0],
+        instruction=say(place) if template else libero.language(problem.name),
         counterfactuals=tuple(
             Counterfactual(say(d), ids[d], (_changed(cfg, program, place), _changed(cfg, program, d)))
             for d in _others(cfg, program, carried, place)

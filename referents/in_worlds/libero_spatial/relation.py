@@ -24,7 +24,7 @@ from referents.design import Design, Placement
 from referents.features import POSITION, Alternative, Feature, object_alternatives
 from referents.schema import Candidate, ReferentConfig
 
-CONFOUNDS = ("position",)
+CONFOUNDS = ("position", "layout")
 
 
 @dataclass(frozen=True)
@@ -96,6 +96,8 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("objects", "needs one object with role: referent (the bowl) and one with role: destination")
     if not _pairs(cfg):
         raise cfg.fail("places", "no two places can hold the two bowls together")
+    if cfg.confound == "layout" and not _liberos_pairs(cfg):
+        raise cfg.fail("confound", "no LIBERO-Spatial task stands both its bowls in places of ours")
     if not any(_nameable(cfg, p) for pair in _pairs(cfg) for p in pair):
         raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place whose bowl can be named")
 
@@ -111,13 +113,37 @@ def _say(template: str, place: _Place) -> str:
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
+    at = {p.region: p for p in _places(cfg)}
+    if cfg.confound == "layout":
+        named, other = (at[region] for region in balance.pick("task", _liberos_pairs(cfg)))
+        return _scene(cfg, balance, named, other)
     partners: dict[str, list[str]] = {}
     for a, b in _pairs(cfg):
         partners.setdefault(a.region, []).append(b.region)
         partners.setdefault(b.region, []).append(a.region)
-    at = {p.region: p for p in _places(cfg)}
     named = at[balance.pick("named", [region for region in partners if _nameable(cfg, at[region])])]
     other = at[balance.pick(("other", named.region), partners[named.region], also="present")]
+    return _scene(cfg, balance, named, other)
+
+
+def _liberos_pairs(cfg: ReferentConfig) -> list[tuple[str, str]]:
+    """`confound=layout`: (named bowl's region, other bowl's region) of each LIBERO-Spatial task whose
+    two bowls both stand in places of ours, as LIBERO's demonstrations lay them out: each place named
+    is always beside the same other place, so the layout says which bowl is meant."""
+    at = {p.region for p in _places(cfg)}
+    suite, pairs = worlds.world(cfg.world).suite, []
+    for task in libero.tasks(suite):
+        problem = libero.problem(suite, task)
+        where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+        target = problem.goal[0][1]  # (On <bowl> plate_1)
+        other = [i for i, k in problem.objects.items() if k == _bowl(cfg).kind and i != target]
+        if where.get(target) in at and len(other) == 1 and where.get(other[0]) in at:
+            pairs.append((where[target], where[other[0]]))
+    return pairs
+
+
+def _scene(cfg: ReferentConfig, balance: Balance, named: _Place, other: _Place) -> Design:
+    """The two bowls in their places (the named one and the other), the rest in LIBERO's places."""
     first, second = sorted((named, other), key=_slot)  # ids by place, not by role
     template = balance.pick("template", cfg.templates)
     ids = {first.region: "bowl_a", second.region: "bowl_b"}

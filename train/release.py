@@ -1,0 +1,443 @@
+"""The release in LIBERO's scenes: one set of weights on the seven-type mix, every axis judged in
+LIBERO's own simulator, beside the same mix laid out as LIBERO's demonstrations are.
+
+python -m train.release                          # every stage; a killed run continues where it stopped
+python -m train.release 'arms=[confounded]'      # one arm: two processes on one out= run the arms side by side
+python -m train.release train=false              # nothing trained or taken: the docs from what is finished
+
+Stages, each done once and reused (train/stages.py), so the run spans as many sittings as it needs:
+
+* **data**, one dataset per arm, the README's seven-type mix (`per_type` episodes of each):
+  `deconfounded`, and `confounded`: the same types laid out as LIBERO's demonstrations are where
+  LIBERO has tasks of that kind (`confound=layout`: each grocery in the scene of LIBERO-Object's
+  task that fetches it; the bowls in LIBERO-Spatial's tasks' pairs of places; LIBERO-Goal's one
+  layout) and, for the four kinds LIBERO never asks (color, category, negation, composition), with
+  the target always where LIBERO puts its targets (`confound=position`: the canonical slot, LIBERO's
+  target region): what a LIBERO-like collection of those instructions would hold;
+* **exams**: a held-out `split=exam` exam per axis (`trials`), and the canonical exams of
+  LIBERO-Object, -Spatial and -Goal (`states` of LIBERO's own initial states per task);
+* **training**: one LoRA per arm on its mix, docs/RESULTS_LIBERO.md's recipe (the tiny policy, the
+  pointer loss), `steps_per_axis` steps per type, the last `cool` of them cooling the learning
+  rate to `lr_floor`, every batch drawing the seven types equally (`balance`);
+* **takes**: each arm on each axis's exam in our rebuild, with the `position` shortcut (and
+  `named_place`, where a type has one) on the same rows; in LIBERO's simulator for the arms in
+  `libero`; the deconfounded checkpoint on the canonical exams in LIBERO's simulator.
+
+Results (from the finished reports, whichever process finishes last): docs/RESULTS_LIBERO_AXES.md,
+docs/results_libero_axes.json (rows: axis, arm, sim, faces) and docs/libero_axes.png; the
+checkpoints in docs/checkpoints/libero-release-lora and docs/checkpoints/libero-release-confounded-lora.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shlex
+import sys
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from core.exam import Exam, read
+from gen.config import GenConfig, parse
+from jobs.cli import UserError, main
+from referents import registry
+from train.stages import WEIGHTS_DIGEST, Ledger, cell, commit, exam_report, generate_once, reference_report, train_once, value
+
+# axis -> (the mix's item: the type in its LIBERO scene, the confounded arm's confound)
+AXES: dict[str, tuple[str, str]] = {
+    "object": ("object@libero_object", "layout"),
+    "relation": ("relation@libero_spatial", "layout"),
+    "goal": ("goal@libero_goal", "layout"),
+    "color": ("color@libero_spatial", "position"),
+    "category": ("category@libero_object", "position"),
+    "negation": ("negation@libero_object", "position"),
+    "composition": ("composition@libero_object", "position"),
+}
+ARMS = ("deconfounded", "confounded")
+SIMS = ("ours", "libero")
+CANONICAL = ("libero_object", "libero_spatial", "libero_goal")
+COMMITTED = {"deconfounded": "libero-release-lora", "confounded": "libero-release-confounded-lora"}
+RESULTS, JSON, PICTURE = "RESULTS_LIBERO_AXES.md", "results_libero_axes.json", "libero_axes.png"
+SHOWN = ("task", "obeyed_name", "true_target", "occ", "nonsense", "switch_obeyed")
+
+
+@dataclass
+class ReleaseOptions:
+    arms: list[str] = field(default_factory=lambda: list(ARMS))  # the arms this process trains and takes
+    axes: list[str] = field(default_factory=lambda: list(AXES))  # the types mixed (all seven: the release)
+    per_type: int = 200  # episodes of each type in each arm's dataset
+    trials: int = 20  # trials of each axis's held-out exam
+    states: int = 2  # the canonical exams: LIBERO's initial states per task (drawn with seed + 1)
+    steps_per_axis: int = 2000  # training steps per type (seven: 14000)
+    cool: float = 1 / 3  # the last this fraction of the steps cools the learning rate down
+    lr_floor: float = 0.05
+    point_weight: float = 1.0  # the pointer loss, without which the tiny policy did not find LIBERO's groceries
+    balance: bool = True  # every batch draws the types equally
+    replan: int = 5  # actions of each predicted chunk executed before the policy looks again
+    image_size: int = 128
+    seed: int = 0  # the datasets' and the training's seed (the exams' is seed + 1)
+    workers: int = 2  # generation and exam processes
+    threads: int = 2  # training threads (1 each when the arms train side by side)
+    libero: list[str] = field(default_factory=lambda: list(ARMS))  # arms whose exams LIBERO's simulator takes too
+    canonical: bool = True  # the deconfounded checkpoint on LIBERO's canonical exams in LIBERO's simulator
+    train: bool = True  # false: nothing made, trained or taken; the docs from what is finished
+    commit_mb: float = 20.0  # checkpoints up to this size are copied to docs/checkpoints/
+    out: str = "runs/release"
+    docs: str = "docs"
+
+
+def _check(options: ReleaseOptions) -> None:
+    for name, allowed in (("arms", ARMS), ("axes", tuple(AXES)), ("libero", ARMS)):
+        chosen = getattr(options, name)
+        if any(c not in allowed for c in chosen) or len(set(chosen)) != len(chosen) or (name != "libero" and not chosen):
+            raise UserError(f"{name} must be some of {', '.join(allowed)}, each once; got {chosen}")
+    if len(options.axes) < 2:
+        raise UserError(f"axes must name two or more types to mix, got {options.axes}")
+    for name in ("per_type", "trials", "states", "steps_per_axis", "replan", "workers", "threads"):
+        if getattr(options, name) < 1:
+            raise UserError(f"{name} must be at least 1, got {getattr(options, name)}")
+    if options.states > 50:
+        raise UserError(f"states must be at most 50 (LIBERO's initial states per task), got {options.states}")
+    if not 0 <= options.cool < 1 or not 0 <= options.lr_floor <= 1 or options.point_weight < 0:
+        raise UserError(f"cool must be in [0, 1), lr_floor in [0, 1], point_weight >= 0; got {options.cool}, "
+                        f"{options.lr_floor}, {options.point_weight}")  # fmt: skip
+
+
+def _gen(options: ReleaseOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
+    """A `python -m gen` command line and its validated config (resume=true: a generation killed
+    with the run continues; a finished one is not asked again)."""
+    line = [*args, f"image_size={options.image_size}", f"workers={options.workers}", f"out={out}"]
+    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true", "resume=true"])
+
+
+def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
+    """Stage name -> (command, config): each chosen arm's dataset and every axis's exam."""
+    root, stages = Path(options.out), {}
+    items = [AXES[a][0] for a in options.axes]
+    for arm in options.arms:
+        mixed = [f"referent=[{','.join(items)}]", f"n={options.per_type * len(items)}", f"seed={options.seed}"]
+        if arm == "confounded":
+            mixed.append(f"confound=[{','.join(AXES[a][1] for a in options.axes)}]")
+        stages[f"data {arm}"] = _gen(options, root / "data" / arm, *mixed)
+    for axis in options.axes:
+        type_, world = AXES[axis][0].split("@")
+        exam = (f"referent={type_}", f"world={world}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}")
+        stages[f"exam {axis}"] = _gen(options, root / "exams" / axis, *exam)
+    return stages
+
+
+def _canonical(options: ReleaseOptions, ledger: Ledger, commands: list[str]) -> dict[str, tuple[Exam, Path]]:
+    """LIBERO's canonical exams (gen.canonical), made once."""
+    import time
+
+    from gen.build.canonical import CanonicalOptions, build
+
+    made = {}
+    for world in CANONICAL:
+        out = Path(options.out) / "exams" / f"canonical-{world}"
+        chosen = CanonicalOptions(world, options.states, options.seed + 1, options.image_size, str(out))
+        commands.append(f"python -m gen.canonical world={world} states={chosen.states} seed={chosen.seed} "
+                        f"image_size={chosen.image_size} out={out}")  # fmt: skip
+        if not (out / "exam.json").is_file():
+            start = time.perf_counter()
+            build(chosen)
+            ledger.spend(f"generate canonical {world}", start)
+        made[world] = (read(str(out)), out)
+    return made
+
+
+def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: list[str]) -> dict | None:
+    """Train (or continue, or reuse) the arm's LoRA; its log."""
+    from train.fit import LoraOptions, TrainConfig
+
+    root = Path(options.out)
+    steps = options.steps_per_axis * len(options.axes)
+    cfg = TrainConfig(
+        dataset=str(root / "data" / arm),
+        out=str(root / "ckpt" / arm),
+        steps=steps,
+        decay=int(round(steps * options.cool)),
+        lr_floor=options.lr_floor,
+        lora=LoraOptions(16),
+        point_weight=options.point_weight,
+        balance=options.balance,
+        threads=options.threads,
+        seed=options.seed,
+        resume=True,
+    )
+    commands.append(
+        f"python -m train dataset={cfg.dataset} policy=tiny lora.rank=16 steps={steps} decay={cfg.decay} "
+        f"lr_floor={cfg.lr_floor} point_weight={cfg.point_weight} balance={str(cfg.balance).lower()} "
+        f"threads={cfg.threads} seed={cfg.seed} out={cfg.out}"
+    )
+    return train_once(cfg, ledger, f"train {arm}")
+
+
+def _report_dir(root: Path, arm: str, exam: str, sim: str) -> Path:
+    return root / "reports" / arm / f"{exam}-{sim}"
+
+
+def run(options: ReleaseOptions) -> None:
+    """Every stage the chosen arms need, in the order that gives results soonest: data, exams,
+    then per arm its training and its takes in our rebuild, then LIBERO's simulator's takes."""
+    _check(options)
+    stages = _stages(options)
+    # Only for valid input, and before generation makes a GL context in this process: triton, which
+    # torch's compiler loads (transformers imports it with the text tower), crashes (SIGSEGV) after one.
+    import torch._dynamo  # noqa: F401
+
+    from train.policy import MODEL_FILE
+
+    root = Path(options.out)
+    ledger, commands = Ledger(root), []
+    exams: dict[str, tuple[Exam, Path]] = {}
+    for name, (line, cfg) in stages.items():
+        commands.append(line)
+        generate_once(cfg, ledger, f"generate {name}")
+        if name.startswith("exam"):
+            exams[name.split()[1]] = (read(str(cfg.out)), Path(str(cfg.out)))
+    canonical = _canonical(options, ledger, commands) if options.canonical and "deconfounded" in options.arms else {}
+    for axis, (exam, folder) in exams.items():
+        type_, world = AXES[axis][0].split("@")
+        if registry.load(type_, world=world).code.named_place is not None:
+            out = root / "reports" / "named_place" / axis
+            commands.append(f"python -m eval policy=named_place exam={folder} workers=2 out={out}")
+            reference_report(exam, "named_place", out, ledger, f"named_place {axis}")
+    trained = {}
+    for arm in options.arms:
+        _train(options, arm, ledger, commands)
+        trained[arm] = root / "ckpt" / arm
+        commit(trained[arm] / MODEL_FILE, Path(options.docs) / "checkpoints" / COMMITTED[arm], options.commit_mb)
+        _takes(options, arm, trained[arm], {a: exams[a] for a in options.axes}, "ours", ledger, commands)
+    for arm, weights in trained.items():
+        if arm in options.libero:
+            _takes(options, arm, weights, {a: exams[a] for a in options.axes}, "libero", ledger, commands)
+    if "deconfounded" in trained:
+        named = {f"canonical-{world}": made for world, made in canonical.items()}
+        _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, baseline=False)
+    _commands_file(root).write_text(json.dumps(list(dict.fromkeys([*_commands(root), *commands])), indent=2))
+
+
+def _takes(
+    options: ReleaseOptions,
+    arm: str,
+    weights: Path,
+    exams: dict[str, tuple[Exam, Path]],
+    sim: str,
+    ledger: Ledger,
+    commands: list[str],
+    baseline: bool = True,
+) -> None:
+    """The checkpoint's take of each exam in `sim` (ours: with the `position` shortcut's faces)."""
+    for name, (exam, folder) in exams.items():
+        out = _report_dir(Path(options.out), arm, name, sim)
+        commands.append(
+            f"python -m eval policy=ckpt:{weights} exam={folder} replan={options.replan} workers=2 sim={sim} out={out}"
+        )
+        stage = f"eval {arm} {name} {sim}"
+        exam_report(exam, weights, exam.trials, out, options.replan, ledger, stage, baseline and sim == "ours", sim)
+
+
+def _commands_file(root: Path) -> Path:
+    return root / "commands.json"
+
+
+def _commands(root: Path) -> list[str]:
+    path = _commands_file(root)
+    return json.loads(path.read_text()) if path.is_file() else []
+
+
+def _finished(report_dir: Path, weights: Path | None) -> dict | None:
+    """The report in `report_dir` if it was taken with `weights` as they are now (None: a
+    reference policy's, kept while its exam is)."""
+    from train.policy import MODEL_FILE
+
+    path, stamp = report_dir / "report.json", report_dir / WEIGHTS_DIGEST
+    if not path.is_file() or not stamp.is_file():
+        return None
+    if weights is not None:
+        model = weights / MODEL_FILE
+        if not model.is_file() or hashlib.sha256(model.read_bytes()).hexdigest() != stamp.read_text():
+            return None
+    return json.loads(path.read_text())
+
+
+def collect(options: ReleaseOptions) -> dict:
+    """Every finished result under `out`, whichever process took it: the rows the docs show."""
+    from train.stages import train_log
+
+    root = Path(options.out)
+    rows, not_run, training = [], [], {}
+    for arm in ARMS:
+        weights = root / "ckpt" / arm
+        log = train_log(weights)
+        if log is None:
+            not_run.append(f"training {arm}")
+            continue
+        training[arm] = {"steps": log["steps"], "final_loss": log["final_loss"],
+                         "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]]}  # fmt: skip
+        for name in [*AXES, *(f"canonical-{w}" for w in CANONICAL)]:
+            for sim in SIMS:
+                report = _finished(_report_dir(root, arm, name, sim), weights)
+                if report is None:
+                    continue
+                axis, exam = (name, "axis") if name in AXES else (name.removeprefix("canonical-"), "canonical")
+                rows.append({
+                    "axis": axis, "exam": exam, "arm": arm, "sim": sim, "faces": report["faces"],
+                    "position": (report.get("baseline") or None), "rollouts": report.get("rollouts"),
+                    "simulator_versions": report.get("simulator_versions"),
+                })  # fmt: skip
+    for axis in AXES:
+        report = _finished(root / "reports" / "named_place" / axis, None)
+        if report is not None:
+            rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "faces": report["faces"]})
+    return {
+        "settings": asdict(options),
+        "confounded_arm": {axis: confound for axis, (_, confound) in AXES.items()},
+        "rows": rows,
+        "training": training,
+        "not_run": not_run,
+        "commands": _commands(root),
+        "timings_s": Ledger(root).spent,
+    }
+
+
+def _find(results: dict, axis: str, arm: str, sim: str, exam: str = "axis") -> dict | None:
+    return next((r for r in results["rows"] if (r["axis"], r["arm"], r["sim"], r["exam"]) == (axis, arm, sim, exam)), None)
+
+
+def write_docs(results: dict, docs: Path) -> None:
+    docs.mkdir(parents=True, exist_ok=True)
+    (docs / JSON).write_text(json.dumps(results, indent=2))
+    s = results["settings"]
+    lines = [
+        "# Results: the seven axes in LIBERO's scenes, one set of weights",
+        "",
+        f"Generated by `python -m train.release` ({', '.join(f'{k}={value(v)}' for k, v in s.items())}) from the "
+        "reports its takes wrote. Each arm's dataset holds "
+        f"{s['per_type']} oracle demonstrations of each type at {s['image_size']} px; each axis's held-out exam "
+        f"{s['trials']} trials. Rates are k/n with a 95% interval that resamples whole trials (rollouts of one "
+        "trial share its scene). *ours*: our rebuild of LIBERO's scenes; *libero*: LIBERO's own simulator "
+        "(`sim=libero`).",
+        "",
+        "**The arms.** *deconfounded*: the README's seven-type mix, every object target and distractor in "
+        "every place. *confounded*: the same types, laid out as LIBERO's demonstrations are where LIBERO has "
+        "tasks of that kind: `object` each grocery in the scene of the LIBERO-Object task that fetches it, "
+        "`relation` the two bowls in the places of a LIBERO-Spatial task, `goal` LIBERO-Goal's one layout. "
+        "LIBERO asks nothing by colour, category, negation or composition, so there the confounded arm puts "
+        "the target where LIBERO puts its targets (`confound=position`: the canonical slot, LIBERO-Object's "
+        "target region and LIBERO-Spatial's bowl between the plate and the ramekin): that is what those "
+        "instructions would teach if collected as LIBERO collects its own, the target found by its place. "
+        "In LIBERO-Goal's one layout every goal stands in every scene, so the layout holds no shortcut "
+        "among a task's alternatives (its audit finds none); what it withholds is any scene but that one.",
+    ]
+    axis_rows = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
+    if axis_rows:
+        lines += [
+            "",
+            "## Obeyed name, per axis",
+            "",
+            "A swap row changes one word; *obeyed* is the hand within 5 cm of what the new word names.",
+            "",
+            "| axis | deconfounded, libero | deconfounded, ours | confounded, libero | confounded, ours "
+            "| `position` (ours) | `named_place` (ours) | chance |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for axis in axis_rows:
+            cells = [_face(_find(results, axis, arm, sim), "obeyed_name") for arm in ARMS for sim in ("libero", "ours")]
+            ours = _find(results, axis, "deconfounded", "ours") or _find(results, axis, "confounded", "ours")
+            position = cell(ours["position"]["obeyed_name"]) if ours and ours.get("position") else "—"
+            named = _face(_find(results, axis, "named_place", "ours"), "obeyed_name")
+            chance = next((f"{r['faces']['obeyed_name']['chance']:.0%}" for r in results["rows"] if r["axis"] == axis), "—")
+            lines.append(f"| {axis} | {' | '.join(cells)} | {position} | {named} | {chance} |")
+        lines += ["", f"![obeyed name per axis, both arms, in LIBERO's simulator]({PICTURE})", ""]
+        lines += ["## Every face", "", "| axis | arm | sim | " + " | ".join(SHOWN) + " |", "|---|---|---|" + "---|" * len(SHOWN)]
+        for axis in axis_rows:
+            for r in (x for x in results["rows"] if x["axis"] == axis and x["exam"] == "axis"):
+                lines.append(f"| {axis} | {r['arm']} | {r['sim']} | " + " | ".join(_face(r, f) for f in SHOWN) + " |")
+        plot(results, docs / PICTURE)
+    canonical = [r for r in results["rows"] if r["exam"] == "canonical"]
+    if canonical:
+        lines += [
+            "",
+            "## LIBERO's own tasks with seven axes in one weight",
+            "",
+            f"The deconfounded checkpoint on the canonical exams ({s['states']} of LIBERO's initial states per task), "
+            "in LIBERO's simulator.",
+            "",
+            "| suite | task | obeyed name | true target |",
+            "|---|---|---|---|",
+        ]
+        for r in canonical:
+            lines.append(f"| {r['axis']} | {_face(r, 'task')} | {_face(r, 'obeyed_name')} | {_face(r, 'true_target')} |")
+    if results["training"]:
+        lines += ["", "## Training", ""]
+        lines += [f"- {arm}: {t['steps']} steps, final loss {t['final_loss']:.4f}" for arm, t in results["training"].items()]
+    missing = list(results["not_run"]) + [
+        f"{arm} on {axis} ({sim})"
+        for arm in results["training"]
+        for axis in s["axes"]
+        for sim in ("ours", *(["libero"] if arm in s["libero"] else []))
+        if not _find(results, axis, arm, sim)
+    ]
+    if missing:
+        lines += ["", f"Not finished in `{s['out']}` (yet): {', '.join(missing)}."]
+    lines += ["", "Commands, in order:", "", "```", *results["commands"], "```", ""]
+    lines += ["Wall time per stage (s, this 2-core machine, summed over the invocations that did its work):", ""]
+    lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
+    (docs / RESULTS).write_text("\n".join(lines) + "\n")
+
+
+def _face(row: dict | None, face: str) -> str:
+    return cell(row["faces"][face]) if row and face in row["faces"] else "—"
+
+
+def plot(results: dict, path: Path) -> None:
+    """Obeyed name per axis for both arms (LIBERO's simulator where taken there, else ours,
+    hatched), chance dotted and the `position` shortcut as a cross."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    axes = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
+    x = np.arange(len(axes))
+    fig, ax = plt.subplots(figsize=(1.3 * len(axes) + 2, 4))
+    labelled: set[str] = set()
+    for offset, arm, color in ((-0.2, "deconfounded", "tab:blue"), (0.2, "confounded", "tab:orange")):
+        for i, axis in enumerate(axes):
+            row = _find(results, axis, arm, "libero") or _find(results, axis, arm, "ours")
+            if row is None:
+                continue
+            face = row["faces"]["obeyed_name"]
+            lo, hi = face.get("ci_trials") or face["ci"]
+            label = f"{arm} (hatched: in ours)" if arm not in labelled else None
+            labelled.add(arm)
+            ax.bar(i + offset, face["rate"], 0.38, color=color, hatch="" if row["sim"] == "libero" else "//",
+                   yerr=[[face["rate"] - lo], [hi - face["rate"]]], capsize=3, label=label)  # fmt: skip
+    for i, axis in enumerate(axes):
+        row = next(r for r in results["rows"] if r["axis"] == axis and r["exam"] == "axis")
+        ax.hlines(row["faces"]["obeyed_name"]["chance"], i - 0.45, i + 0.45, colors="k", linestyles=":")
+        ours = _find(results, axis, "deconfounded", "ours") or _find(results, axis, "confounded", "ours")
+        if ours and ours.get("position"):
+            ax.plot(i, ours["position"]["obeyed_name"]["rate"], "kx", markersize=9, label="position shortcut" if i == 0 else None)
+    ax.set_xticks(x, axes)
+    ax.set(ylabel="obeyed name (5 cm)", ylim=(0, 1.05), title="Held-out exams; dotted: chance")
+    ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def release(options: ReleaseOptions) -> None:
+    if options.train:
+        run(options)
+    else:
+        _check(options)
+    write_docs(collect(options), Path(options.docs))
+    print((Path(options.docs) / RESULTS).read_text())
+
+
+if __name__ == "__main__":
+    sys.exit(main("python -m train.release", ReleaseOptions, release, doc=__doc__))
