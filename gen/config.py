@@ -47,9 +47,7 @@ class GenConfig:
     split: str = "train"  # train: a LeRobot dataset; exam: an exam (held-out random stream, no video)
     workers: Optional[int] = None  # processes producing episodes; default: this machine's cores
     backend: str = "process"  # process (this machine) | ray (Ray tasks; RAY_ADDRESS selects a cluster)
-    # position: target in its canonical slot; layout: a benchmark task's own scene; with a list of types,
-    # one for all of them or a list of one each ([layout,position,...]; null: that type deconfounded)
-    confound: Any = None
+    confound: Any = None  # position: target in its canonical slot; layout: a benchmark task's own scene; a mix: one each ([..])
     push_to_hub: bool = False  # push the finished dataset (or exam) with gen/push.py
     repo_id: Optional[str] = None  # <user or org>/<name> to push to
     profile: Optional[str] = None  # native (joint targets) | libero (LIBERO's features, OSC deltas); default: the world's

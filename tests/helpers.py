@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import mujoco
 import numpy as np
+import pandas as pd
 
 from core import libero
+from core.exam import FACES, Exam, read
 from core.layout import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World
@@ -156,21 +162,90 @@ def liberos_own(command: str, request: dict, out: Path) -> Path:
     return out
 
 
-def canonical_reports(out: Path, trials: dict[str, int], world: str = "libero_object") -> dict[str, dict]:
-    """A canonical exam of `world` on the first initial state of each task (gen.canonical), each
-    policy taken on its first `trials[policy]` trials: the policies' reports."""
-    from core.exam import read
-    from eval.battery import take
-    from eval.registry import make
-    from gen.build.canonical import CanonicalOptions, build
+# The 2-trial exams at 32 px (seed 5) that several files read, each as `shared.dataset(f"{referent}-exam",
+# f"referent={referent}", *SMALL_EXAM)`: one product per referent in a run.
+SMALL_EXAM = ("n=2", "split=exam", "seed=5", "image_size=32", "workers=1")
+# The one-trial exam of the object type, at 32 px (`shared.dataset("exam", *ONE_TRIAL)`) and at 64 px
+# (`shared.dataset("exam", *ONE_TRIAL_64)`), that tests only read or take.
+ONE_TRIAL = ("n=1", "split=exam", "image_size=32")
+ONE_TRIAL_64 = ("n=1", "split=exam", "image_size=64")
 
-    build(CanonicalOptions(world=world, states=1, image_size=32, out=str(out / "canonical"), switches=0))  # switch: its own test
-    exam = read(out / "canonical")
-    reports = {}
-    for policy, n in trials.items():
-        rows = exam.trials[exam.trials["trial"] < n]
-        reports[policy], _ = take(exam, rows, make(policy), out / policy, workers=2, policy_name=policy, baseline=False)
-    return reports
+
+class Shared:
+    """Products built once per pytest run and shared by every test that reads the same one, on
+    either of xdist's workers: each is built under `root` (one folder per run, seen by both
+    workers) in a folder named by its recipe (what builds it), under a file lock, so a worker that
+    asks for a product the other is building waits for it and reuses it. Tests only read a shared
+    product; one that changes its product builds its own."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+
+    def product(self, recipe: Sequence[str], build: Callable[[Path], object]) -> Path:
+        """The folder holding the product of `recipe`, made by `build(folder)` the first time any worker asks."""
+        name = hashlib.sha256(json.dumps(list(recipe)).encode()).hexdigest()[:16]
+        folder, done = self.root / name, self.root / f"{name}.done"
+        with _locked(self.root / f"{name}.lock"):
+            if not done.exists():
+                shutil.rmtree(folder, ignore_errors=True)  # what a failed build left
+                folder.mkdir(parents=True)
+                build(folder)
+                done.write_text(json.dumps(list(recipe)))
+        return folder
+
+    def dataset(self, name: str, *overrides: str) -> Path:
+        """The dataset or exam the CLI's `overrides` generate (make_dataset), in any order, in a folder called `name`."""
+        return self.product(("gen", name, *sorted(overrides)), lambda folder: make_dataset(folder / name, *overrides)) / name
+
+    def canonical(self, world: str = "libero_object") -> Path:
+        """`world`'s canonical exam (gen.canonical) on the first of LIBERO's initial states of each task, at
+        32 px, without switch rows (the switch face has its own tests)."""
+        from gen.build.canonical import CanonicalOptions, build
+
+        def made(folder: Path) -> None:
+            build(CanonicalOptions(world=world, states=1, image_size=32, out=str(folder / "canonical"), switches=0))
+
+        return self.product(("gen.canonical", world, "states=1", "image_size=32", "switches=0"), made) / "canonical"
+
+    def take(self, exam: Path, policy: str, trials: int, faces: Sequence[str] = ()) -> dict:
+        """`policy`'s report on the first `trials` trials of a shared exam, their rows of `faces` (default
+        every row), with no shortcut baseline."""
+        from eval.battery import take
+        from eval.registry import make
+
+        def taken(folder: Path) -> None:
+            whole = read(exam)
+            rows = rows_of(whole, faces or FACES, trials)
+            take(whole, rows, make(policy), folder / "take", workers=2, policy_name=policy, baseline=False)
+
+        folder = self.product(("take", str(exam), policy, f"trials={trials}", *sorted(faces)), taken)
+        return json.loads((folder / "take" / "report.json").read_text())
+
+
+def rows_of(exam: Exam, faces: Iterable[str], trials: int | None = None) -> pd.DataFrame:
+    """The exam's rows of `faces` (of its first `trials` trials): what a take needs where a test reads only
+    those faces of its report. A trial's rows share one initial state, so its init-value check loses nothing."""
+    rows = exam.trials[exam.trials["face"].isin(list(faces))]
+    return rows if trials is None else rows[rows["trial"] < trials]
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on `path` (created if missing) across processes."""
+    with path.open("a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def canonical_reports(shared: Shared, trials: dict[str, int], world: str = "libero_object") -> dict[str, dict]:
+    """The shared canonical exam of `world` (Shared.canonical), each policy taken on its first
+    `trials[policy]` trials: the policies' reports. The tests read `nothing`'s every face and only
+    the task and swap faces of the others, which take only those rows (rows_of)."""
+    exam = shared.canonical(world)
+    return {policy: shared.take(exam, policy, n, () if policy == "nothing" else ("task", "swap")) for policy, n in trials.items()}
 
 
 def liberos_replay(dataset: Path, world: World) -> dict:

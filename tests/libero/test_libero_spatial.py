@@ -26,11 +26,13 @@ from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,
     REPLAYS,
+    Shared,
     canonical_reports,
     initial_state_pictures,
     liberos_own,
     liberos_replay,
     make_dataset,
+    rows_of,
 )
 from oracle.scene import scene_for
 from referents import registry
@@ -127,7 +129,8 @@ def test_a_libero_spatial_dataset_loads_and_the_audit_finds_no_leak(spatial_data
     assert len(set(places)) > 5  # the named bowl's place varies
 
 
-def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
+@pytest.mark.reference
+def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path, shared: Shared) -> None:
     """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in docs/LIBERO.md's run);
     on the first state of each task the oracle completes the task
     rows (49/50 over the first 5 states: docs/LIBERO.md) and obeys the swaps, while the shortcut LIBERO's layouts reward
@@ -136,7 +139,7 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
     scores 0 everywhere."""
     build(CanonicalOptions(world=SUITE, states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all"), switches=0))
     assert read(tmp_path / "all").meta["trials"] == 10 * CANONICAL_STATES
-    reports = canonical_reports(tmp_path, {"oracle": 10, "position": 10, "nothing": 1}, SUITE)  # nothing runs to the horizon
+    reports = canonical_reports(shared, {"oracle": 10, "position": 10, "nothing": 1}, SUITE)  # nothing runs to the horizon
     oracle, position, nothing = (reports[policy]["faces"] for policy in ("oracle", "position", "nothing"))
     assert oracle["task"]["k"] >= 9 and oracle["obeyed_name"]["rate"] >= 0.9
     assert position["task"]["k"] >= 7 and position["obeyed_name"]["rate"] <= 0.2
@@ -146,9 +149,8 @@ def test_the_canonical_exam_shows_the_remembered_bowl(tmp_path: Path) -> None:
 def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> None:
     root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=6", "split=exam", "image_size=32", "seed=2", "switches=0")
     exam = read(root)
-    report, _ = take(
-        exam, exam.trials, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False
-    )
+    swaps = rows_of(exam, ["swap"])  # the face read below
+    report, _ = take(exam, swaps, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False)
     obeyed = report["faces"]["obeyed_name"]
     # chance counts every object a hand can land on (two bowls, the cookie box, the ramekin); the
     # shortcut goes to a bowl, so it obeys a swap as a blind pick between the two bowls does

@@ -30,11 +30,13 @@ from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,
     REPLAYS,
+    Shared,
     canonical_reports,
     initial_state_pictures,
     liberos_own,
     liberos_replay,
     make_dataset,
+    rows_of,
 )
 from oracle.scene import scene_for
 from referents import registry
@@ -144,14 +146,15 @@ def test_liberos_layout_files_match_the_referent(referent: registry.Referent) ->
         assert libero.language(task) == "pick up the {name} and place it in the basket".format(name=name)
 
 
-def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
+@pytest.mark.reference
+def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path, shared: Shared) -> None:
     """LIBERO's initial states load (CANONICAL_STATES of each task's 50; all 500 in docs/LIBERO.md's run);
     on the first state of each task the oracle completes the task
     and obeys every rename, while the shortcut LIBERO's layouts reward (`position`) completes the
     task and obeys no rename, going to the original target; `nothing` scores 0 everywhere."""
     build(CanonicalOptions(states=CANONICAL_STATES, image_size=32, out=str(tmp_path / "all"), switches=0))
     assert read(tmp_path / "all").meta["trials"] == 10 * CANONICAL_STATES
-    reports = canonical_reports(tmp_path, {"oracle": 5, "position": 5, "nothing": 1})  # nothing runs to the horizon
+    reports = canonical_reports(shared, {"oracle": 5, "position": 5, "nothing": 1})  # nothing runs to the horizon
     assert all(report["init_value"]["trusted"] for report in reports.values())
     oracle, position, nothing = (reports[policy]["faces"] for policy in ("oracle", "position", "nothing"))
     assert oracle["task"]["rate"] == 1.0 and oracle["obeyed_name"]["rate"] >= 0.95
@@ -160,14 +163,13 @@ def test_the_canonical_exam_shows_instruction_blindness(tmp_path: Path) -> None:
     assert all(f["k"] == 0 for f in nothing.values())
 
 
-def test_the_named_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path) -> None:
+def test_the_named_place_shortcut_reads_a_name_as_its_grocerys_region(tmp_path: Path, shared: Shared) -> None:
     """Every LIBERO-Object grocery stands, in its own task, in one of two target regions, and a
     policy can learn the name as that place. In the alphabet soup's task (the soup in region 0,
     the salad dressing in region 1), `named_place` obeys the rename to salad dressing (its own region),
     takes the soup for milk and butter (region-0 groceries) and the salad dressing for cream cheese
     and tomato sauce; `swaps_obeyed` reads the same swaps row by row."""
-    build(CanonicalOptions(states=1, image_size=32, out=str(tmp_path / "canonical"), switches=0))
-    exam = read(tmp_path / "canonical")
+    exam = read(shared.canonical())
     first = exam.trials[exam.trials["trial"] == 0]
     assert "alphabet soup" in first[first["face"] == "task"]["instruction"].iloc[0]
     swaps = first[first["face"] == "swap"]
@@ -183,6 +185,7 @@ def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> 
     root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=4", "split=exam", "image_size=32", "seed=2", "switches=0")
     exam = read(root)
     position = make("position")
-    report, _ = take(exam, exam.trials, position, tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    swaps = rows_of(exam, ["swap"])  # the faces read below
+    report, _ = take(exam, swaps, position, tmp_path / "position", workers=2, policy_name="position", baseline=False)
     obeyed, true_target = report["faces"]["obeyed_name"], report["faces"]["true_target"]
     assert obeyed["ci"][0] <= obeyed["chance"] <= obeyed["ci"][1] and true_target["rate"] <= 0.5

@@ -20,7 +20,7 @@ from core.exam import read
 from eval.baseline import exam_digest
 from eval.battery import take
 from eval.registry import make
-from helpers import make_dataset
+from helpers import SMALL_EXAM, Shared
 from jobs.cli import main
 
 # rollouts.parquet's metadata keys (eval/score.py SIM_KEY, POLICY_KEY, EXAM_KEY), spelt out so that
@@ -48,12 +48,12 @@ def retag(folder: Path, **changes: str | None) -> None:
 
 
 @pytest.fixture(scope="module")
-def takes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+def takes(shared: Shared, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A 2-trial exam; `nothing`'s take of it in our simulator (`ours`), the same take relabelled as
     one in LIBERO's (`libero`), and a copy of the exam whose exam.json differs (`other`: another exam
     with the very same rows)."""
     root = tmp_path_factory.mktemp("agreement")
-    exam = make_dataset(root / "object-exam", "n=2", "split=exam", "seed=5", "image_size=32")
+    exam = shared.dataset("object-exam", "referent=object", *SMALL_EXAM)
     take(read(exam), read(exam).trials, make("nothing"), root / "ours", baseline=False)
     shutil.copytree(root / "ours", root / "libero")
     retag(root / "libero", sim="libero")

@@ -14,7 +14,7 @@ import pytest
 
 from eval.__main__ import EvalOptions, evaluate
 from eval.registry import make, register
-from helpers import interruptible, make_dataset
+from helpers import Shared, interruptible, make_dataset
 from jobs.cli import main
 
 REPORT = ("report.json", "rollouts.parquet")
@@ -36,10 +36,9 @@ def _files(root: Path) -> dict[Path, bytes]:
 
 
 def test_same_named_exams_get_their_own_report_folders_and_no_report_is_silently_replaced(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    shared: Shared, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    first = make_dataset(tmp_path / "a" / "exam", "n=1", "split=exam", "seed=1", "image_size=32", "workers=1")
-    second = make_dataset(tmp_path / "b" / "exam", "n=1", "split=exam", "seed=2", "image_size=32", "workers=1")
+    first, second = (shared.dataset("exam", "n=1", "split=exam", f"seed={seed}", "image_size=32", "workers=1") for seed in (1, 2))
     monkeypatch.chdir(tmp_path)
     for exam in (first, second):
         assert _eval("policy=nothing", f"exam={exam}", "rows=1") == 0

@@ -21,7 +21,7 @@ from core.exam import read
 from core.layout import ACTION_KEY, IMAGE_PREFIX, TASK_KEY
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
-from helpers import make_dataset
+from helpers import ONE_TRIAL_64, Shared
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -90,8 +90,8 @@ def _lerobot_train(args: dict[str, object], out: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
-def exam_64(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return make_dataset(tmp_path_factory.mktemp("exam") / "exam", "n=1", "split=exam", "image_size=64")
+def exam_64(shared: Shared) -> Path:
+    return shared.dataset("exam", *ONE_TRIAL_64)
 
 
 def _eval(*args: str) -> subprocess.CompletedProcess[str]:

@@ -24,7 +24,7 @@ from eval.rollout import ProfileMismatch, Runner
 from gen.build import scenes
 from gen.lerobot.reader import LeRobotReader
 from gen.planning.plan import plan
-from helpers import body_image, make_dataset
+from helpers import ONE_TRIAL, Shared, body_image, make_dataset, rows_of
 from oracle.episode import replay
 from oracle.render import Cameras
 from oracle.scene import scene_for
@@ -151,19 +151,25 @@ def test_frames_are_mirrored_as_in_lerobots_libero_datasets() -> None:
 
 
 def test_a_libero_exam_ranks_the_reference_policies(tmp_path_factory: pytest.TempPathFactory) -> None:
-    root = make_dataset(tmp_path_factory.mktemp("exam") / "x", "n=8", "split=exam", "seed=3", "profile=libero", "image_size=32")
+    args = ("n=8", "split=exam", "seed=3", "profile=libero", "image_size=32", "switches=0")  # the switch face: its own tests
+    root = make_dataset(tmp_path_factory.mktemp("exam") / "x", *args)
     exam = read(root)
     assert json.loads((root / "exam.json").read_text())["profile"] == "libero"
     out = tmp_path_factory.mktemp("runs")
-    oracle = take(exam, exam.trials, make("oracle"), out / "oracle", baseline=False)[0]["faces"]
+    oracle = take(exam, rows_of(exam, ["task", "swap"]), make("oracle"), out / "oracle", baseline=False)[0]["faces"]
     first = exam.trials[exam.trials["trial"] < 2]  # doing nothing runs every row to its horizon: two trials say it
     nothing = take(exam, first, make("nothing"), out / "nothing", baseline=False)[0]["faces"]
     assert oracle["obeyed_name"]["rate"] >= 0.95 and oracle["task"]["rate"] >= 0.95
     assert all(f["k"] == 0 for f in nothing.values())
 
 
-def test_an_action_of_the_other_profile_is_refused_naming_it(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "seed=3", "profile=libero", "image_size=32")
+def libero_exam(shared: Shared) -> Path:
+    """A one-trial exam of the libero profile, at 32 px."""
+    return shared.dataset("libero-exam", "n=1", "split=exam", "seed=3", "profile=libero", "image_size=32")
+
+
+def test_an_action_of_the_other_profile_is_refused_naming_it(shared: Shared) -> None:
+    root = libero_exam(shared)
     env = ExamEnv(root, row=0)
     env.reset()
     with pytest.raises(ProfileMismatch, match=r"native-profile actions of shape \(8,\), but this exam is profile libero"):
@@ -178,7 +184,7 @@ def test_an_action_of_the_other_profile_is_refused_naming_it(tmp_path: Path) -> 
         Runner(joint_targets).run(read(root).trials.iloc[0])
 
 
-def test_an_openpi_libero_server_takes_a_keys_libero_exam(tmp_path: Path) -> None:
+def test_an_openpi_libero_server_takes_a_keys_libero_exam(shared: Shared, tmp_path: Path) -> None:
     """A loopback server speaking openpi's protocol checks each request is exactly what openpi's
     LIBERO example client sends (keys, dtypes, shapes) and answers with 7-d action chunks."""
     import threading
@@ -186,7 +192,7 @@ def test_an_openpi_libero_server_takes_a_keys_libero_exam(tmp_path: Path) -> Non
     from openpi_client import msgpack_numpy
     from websockets.sync.server import serve
 
-    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "seed=3", "profile=libero", "image_size=64")
+    root = libero_exam(shared)
     seen: list[dict] = []
     packer = msgpack_numpy.Packer()
 
@@ -214,12 +220,8 @@ def test_an_openpi_libero_server_takes_a_keys_libero_exam(tmp_path: Path) -> Non
         "prompt": ("str", None, None),
     }
     bad = subprocess.run(
-        [sys.executable, "-m", "eval", f"policy=remote:{address}", "keys=libero", f"exam={native_exam(tmp_path)}"],
+        [sys.executable, "-m", "eval", f"policy=remote:{address}", "keys=libero", f"exam={shared.dataset('exam', *ONE_TRIAL)}"],
         capture_output=True,
         text=True,
     )
     assert bad.returncode == 2 and "this exam is profile native" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
-
-
-def native_exam(tmp_path: Path) -> Path:
-    return make_dataset(tmp_path / "native-exam", "n=1", "split=exam", "seed=3", "image_size=32")

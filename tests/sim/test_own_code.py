@@ -13,7 +13,7 @@ import gymnasium as gym
 import pandas as pd
 import pytest
 
-from helpers import make_dataset
+from helpers import ONE_TRIAL, Shared
 
 ROOT = Path(__file__).resolve().parents[2]
 ANSWER = {"target", "program", "face", "variant", "spec", "alternatives", "original_target", "counterfactuals"}
@@ -52,8 +52,9 @@ def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path
 @pytest.mark.parametrize(
     "module, make",
     [
-        ("gen", ["referent=libero_spatial", "n=2", "split=exam", "image_size=64", "switches=0"]),  # switch: its own test
-        ("gen.canonical", ["world=libero_goal", "states=1", "image_size=64", "switches=0"]),
+        ("gen", ["referent=libero_spatial", "n=2", "split=exam", "image_size=32", "switches=0"]),  # switch: its own test
+        # two of its tasks: each of the ten is taken and scored in tests/libero/test_libero_goal.py's canonical-exam test
+        ("gen.canonical", ["world=libero_goal", "states=1", "tasks=2", "image_size=32", "switches=0"]),
     ],
 )
 def test_the_readmes_own_loop_scores_a_libero_exam_whose_reset_settles(tmp_path: Path, module: str, make: list[str]) -> None:
@@ -80,8 +81,8 @@ print(info["instruction"], sorted(obs))
 """
 
 
-def test_the_env_is_made_from_a_lab_folder_whose_own_packages_share_our_names(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=32")
+def test_the_env_is_made_from_a_lab_folder_whose_own_packages_share_our_names(shared: Shared, tmp_path: Path) -> None:
+    root = shared.dataset("exam", *ONE_TRIAL)
     lab = tmp_path / "lab"
     for package in ("eval", "core"):  # a lab's own packages, first on sys.path when it runs from its folder
         (lab / package).mkdir(parents=True)

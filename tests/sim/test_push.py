@@ -16,6 +16,7 @@ from hubserver import Hub
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core.exam import EXAM_VERSION
+from helpers import ONE_TRIAL, Shared
 
 TOKEN = "hf_not_a_real_token_4f8a"
 
@@ -96,12 +97,9 @@ def _same_bytes(a: Path, b: Path, files: set[str]) -> bool:
 
 
 @pytest.mark.parametrize("kind", ["dataset", "exam"])
-def test_a_second_push_moves_the_tag_to_the_new_data(kind: str, tmp_path: Path) -> None:
-    from helpers import make_dataset
-
+def test_a_second_push_moves_the_tag_to_the_new_data(kind: str, shared: Shared, tmp_path: Path) -> None:
     extra = ["split=exam", "n=1"] if kind == "exam" else ["n=2"]
-    first = make_dataset(tmp_path / "first", *extra, "image_size=32", "seed=1")
-    second = make_dataset(tmp_path / "second", *extra, "image_size=32", "seed=2")
+    first, second = (shared.dataset(kind, *extra, "image_size=32", f"seed={seed}", "workers=1") for seed in (1, 2))
     tag = f"exam-v{EXAM_VERSION}" if kind == "exam" else "v3.0"
     with Hub() as hub:
         assert _push(hub, first, "repo_id=lab/again").returncode == 0
@@ -148,10 +146,8 @@ def test_a_video_that_cannot_be_decoded_fails_the_check_and_is_never_pushed(obje
 
 
 @pytest.fixture
-def exam(tmp_path: Path) -> Path:
-    from helpers import make_dataset
-
-    return make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=32")
+def exam(shared: Shared) -> Path:
+    return shared.dataset("exam", *ONE_TRIAL)
 
 
 def test_exams_push_with_their_own_tag(exam: Path) -> None:

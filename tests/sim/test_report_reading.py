@@ -23,15 +23,15 @@ from core.exam import Exam, read
 from core.spec import EpisodeSpec
 from eval.report import html, markdown
 from eval.score import score
-from helpers import make_dataset
+from helpers import SMALL_EXAM, Shared
 
 ROOT = Path(__file__).resolve().parents[2]
 UNTRAINED = "(pointer not trained: not a prediction)"
 
 
 @pytest.fixture(scope="module")
-def exam(tmp_path_factory: pytest.TempPathFactory) -> Exam:
-    return read(make_dataset(tmp_path_factory.mktemp("exam") / "object-exam", "n=2", "split=exam", "seed=5", "image_size=32"))
+def exam(shared: Shared) -> Exam:
+    return read(shared.dataset("object-exam", "referent=object", *SMALL_EXAM))
 
 
 def _log(row: pd.Series, mode: str) -> dict:

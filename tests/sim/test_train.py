@@ -24,7 +24,8 @@ from eval.registry import make
 from gen.lerobot.stats import image_histogram
 from gen.lerobot.video import encode_episode
 from gen.lerobot.writer import Episode, LeRobotWriter, Recording
-from helpers import make_dataset
+from helpers import ONE_TRIAL_64, Shared, make_dataset
+from jobs.cli import main
 from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
 from train.stages import TIMINGS, Ledger
 
@@ -85,8 +86,8 @@ def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None
     assert [schedule(cool, step) for step in (0, 800, 900)] == pytest.approx([1.0, 1.0, 0.5])
 
 
-def test_a_checkpoint_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
-    exam = read(make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=64"))
+def test_a_checkpoint_takes_an_exam(checkpoint: Path, shared: Shared, tmp_path: Path) -> None:
+    exam = read(shared.dataset("exam", *ONE_TRIAL_64))
     report, _ = take(exam, exam.trials.head(2), make(f"ckpt:{checkpoint}"), tmp_path / "report")
     assert not report["errors"], report["errors"]
     assert report["faces"]["task"]["n"] == 1
@@ -121,26 +122,40 @@ def _train(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "train", *args, "steps=1"], capture_output=True, text=True)
 
 
-def test_datasets_it_cannot_learn_from_are_refused(tmp_path: Path, object_dataset: Path) -> None:
+def _refusal(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, list[str]]:
+    """`python -m train *args steps=1` run as its entry point runs it (jobs.cli.main), in this process
+    (a refusal comes before any training, and a process of its own costs seconds of imports): its
+    exit code and the lines it wrote to stderr."""
+    from train.__main__ import train
+
+    capsys.readouterr()
+    code = main("python -m train", TrainConfig, train, [*args, "steps=1"])
+    return code, capsys.readouterr().err.strip().splitlines()
+
+
+def test_datasets_it_cannot_learn_from_are_refused(
+    tmp_path: Path, object_dataset: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    same = _synthetic(tmp_path / "same", ["pick up the lemon"] * 3)
+    result = _train(f"dataset={same}", f"out={tmp_path / 'ckpt'}")  # once as its own process: one line, as a user sees it
+    assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert "no instruction diversity" in result.stderr, result.stderr
     cases = [
-        (_synthetic(tmp_path / "same", ["pick up the lemon"] * 3), "no instruction diversity"),
         (_synthetic(tmp_path / "onecam", ["a", "b"], cameras=("agentview",)), "native misses 'observation.images.wrist'"),
         (tmp_path / "nothing", "is not a LeRobot dataset"),
     ]
     for dataset, needle in cases:
-        result = _train(f"dataset={dataset}", f"out={tmp_path / 'ckpt'}")
-        assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1 and needle in result.stderr, result.stderr
-    wrong_size = _train(f"dataset={object_dataset}", "image_size=96", f"out={tmp_path / 'ckpt'}")
-    assert wrong_size.returncode == 2 and "frames are 64 px but image_size=96" in wrong_size.stderr
-    assert "regenerate the dataset with image_size=96" in wrong_size.stderr
-    unmakeable = _train(f"dataset={object_dataset}", "image_size=7", f"out={tmp_path / 'ckpt'}")
-    lines = unmakeable.stderr.strip().splitlines()
-    assert unmakeable.returncode == 2 and len(lines) == 1 and "train with image_size=64" in lines[0]
+        code, lines = _refusal(capsys, f"dataset={dataset}", f"out={tmp_path / 'ckpt'}")
+        assert code == 2 and len(lines) == 1 and needle in lines[0], lines
+    code, lines = _refusal(capsys, f"dataset={object_dataset}", "image_size=96", f"out={tmp_path / 'ckpt'}")
+    assert code == 2 and "frames are 64 px but image_size=96" in "\n".join(lines)
+    assert "regenerate the dataset with image_size=96" in "\n".join(lines)
+    code, lines = _refusal(capsys, f"dataset={object_dataset}", "image_size=7", f"out={tmp_path / 'ckpt'}")
+    assert code == 2 and len(lines) == 1 and "train with image_size=64" in lines[0]
     assert "image_size=7" in lines[0] and "regenerate" not in lines[0] and "not a size python -m gen makes" in lines[0]
     for weight in ("point_weight", "aux_weight"):  # a negative loss weight would train away from the target
-        negative = _train(f"dataset={object_dataset}", f"{weight}=-1", f"out={tmp_path / 'ckpt'}")
-        lines = negative.stderr.strip().splitlines()
-        assert negative.returncode == 2 and len(lines) == 1 and f"{weight} must be at least 0, got -1.0" in lines[0]
+        code, lines = _refusal(capsys, f"dataset={object_dataset}", f"{weight}=-1", f"out={tmp_path / 'ckpt'}")
+        assert code == 2 and len(lines) == 1 and f"{weight} must be at least 0, got -1.0" in lines[0]
     assert not (tmp_path / "ckpt").exists()
 
 
@@ -196,7 +211,7 @@ def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: P
     assert twice.returncode == 2 and "lists a folder twice" in twice.stderr and not (tmp_path / "no").exists()
 
 
-def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_path: Path) -> None:
+def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, shared: Shared, tmp_path: Path) -> None:
     server = subprocess.Popen(
         [sys.executable, "-m", "eval.serve", f"policy=ckpt:{checkpoint}", "port=0"], stdout=subprocess.PIPE, text=True
     )
@@ -204,7 +219,7 @@ def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, tmp_pat
         line = server.stdout.readline()
         assert line.startswith("serving"), line
         address = line.strip().rsplit("ws://", 1)[1]
-        exam = read(make_dataset(tmp_path / "exam", "n=1", "split=exam", "image_size=64"))
+        exam = read(shared.dataset("exam", *ONE_TRIAL_64))
         report, _ = take(exam, exam.trials.head(1), make(f"remote:{address}"), tmp_path / "report")
         assert not report["errors"], report["errors"]
     finally:
