@@ -30,6 +30,7 @@ checkpoints in docs/checkpoints/libero-release-lora and docs/checkpoints/libero-
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import shlex
@@ -126,7 +127,7 @@ def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
     return stages
 
 
-def _canonical(options: ReleaseOptions, ledger: Ledger, commands: list[str]) -> dict[str, tuple[Exam, Path]]:
+def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """LIBERO's canonical exams (gen.canonical), made once."""
     import time
 
@@ -146,7 +147,7 @@ def _canonical(options: ReleaseOptions, ledger: Ledger, commands: list[str]) -> 
     return made
 
 
-def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: list[str]) -> dict | None:
+def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: Commands) -> dict | None:
     """Train (or continue, or reuse) the arm's LoRA; its log."""
     from train.fit import LoraOptions, TrainConfig
 
@@ -189,7 +190,7 @@ def run(options: ReleaseOptions) -> None:
     from train.policy import MODEL_FILE
 
     root = Path(options.out)
-    ledger, commands = Ledger(root), []
+    ledger, commands = Ledger(root), Commands(root)
     exams: dict[str, tuple[Exam, Path]] = {}
     for name, (line, cfg) in stages.items():
         commands.append(line)
@@ -215,7 +216,6 @@ def run(options: ReleaseOptions) -> None:
     if "deconfounded" in trained:
         named = {f"canonical-{world}": made for world, made in canonical.items()}
         _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, baseline=False)
-    _commands_file(root).write_text(json.dumps(list(dict.fromkeys([*_commands(root), *commands])), indent=2))
 
 
 def _takes(
@@ -225,7 +225,7 @@ def _takes(
     exams: dict[str, tuple[Exam, Path]],
     sim: str,
     ledger: Ledger,
-    commands: list[str],
+    commands: Commands,
     baseline: bool = True,
 ) -> None:
     """The checkpoint's take of each exam in `sim` (ours: with the `position` shortcut's faces)."""
@@ -238,13 +238,25 @@ def _takes(
         exam_report(exam, weights, exam.trials, out, options.replan, ledger, stage, baseline and sim == "ours", sim)
 
 
-def _commands_file(root: Path) -> Path:
-    return root / "commands.json"
+class Commands:
+    """The command line of every stage run so far, kept in `out` as each comes (a stopped run's
+    docs list them; two processes on one `out` add to the same file)."""
 
+    def __init__(self, root: Path) -> None:
+        self.path = root / "commands.json"
 
-def _commands(root: Path) -> list[str]:
-    path = _commands_file(root)
-    return json.loads(path.read_text()) if path.is_file() else []
+    def read(self) -> list[str]:
+        return json.loads(self.path.read_text()) if self.path.is_file() else []
+
+    def append(self, line: str) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path.parent / ".commands.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            lines = self.read()
+            if line not in lines:
+                tmp = self.path.with_suffix(".tmp")
+                tmp.write_text(json.dumps([*lines, line], indent=2))
+                tmp.replace(self.path)
 
 
 def _finished(report_dir: Path, weights: Path | None) -> dict | None:
@@ -264,6 +276,7 @@ def _finished(report_dir: Path, weights: Path | None) -> dict | None:
 
 def collect(options: ReleaseOptions) -> dict:
     """Every finished result under `out`, whichever process took it: the rows the docs show."""
+    from jobs.partial import Partial
     from train.stages import train_log
 
     root = Path(options.out)
@@ -272,7 +285,9 @@ def collect(options: ReleaseOptions) -> dict:
         weights = root / "ckpt" / arm
         log = train_log(weights)
         if log is None:
-            not_run.append(f"training {arm}")
+            data = root / "data" / arm
+            made = "" if (data / "meta").is_dir() else f" (its data: {len(Partial(data).saved())} episodes so far)"
+            not_run.append(f"training {arm}{made}")
             continue
         training[arm] = {"steps": log["steps"], "final_loss": log["final_loss"],
                          "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]]}  # fmt: skip
@@ -297,7 +312,7 @@ def collect(options: ReleaseOptions) -> dict:
         "rows": rows,
         "training": training,
         "not_run": not_run,
-        "commands": _commands(root),
+        "commands": Commands(root).read(),
         "timings_s": Ledger(root).spent,
     }
 
