@@ -34,9 +34,9 @@ def pytest_configure(config: pytest.Config) -> None:
 # The longest test files first: `make test` runs files side by side on two cores (xdist --dist
 # loadfile hands them out in collection order), and a long file started last would run alone.
 LONGEST_FIRST = (
-    "test_libero_axes", "test_release", "test_libero_world", "test_battery", "test_own_code", "test_libero_pro", "test_axes_datasets",
-    "test_libero_goal", "test_mixed", "test_libero_spatial", "test_libero", "test_lerobot_policy", "test_resume",
-    "test_train", "test_export",
+    "test_libero_axes", "test_release", "test_libero_world", "test_battery", "test_own_code", "test_libero_pro",
+    "test_axes_datasets", "test_libero_goal", "test_mixed", "test_libero_spatial", "test_libero", "test_lerobot_policy",
+    "test_resume", "test_train", "test_export",
 )  # fmt: skip
 
 
