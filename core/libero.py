@@ -420,6 +420,11 @@ class Problem:
     goal: tuple[tuple[str, ...], ...]
     language: str = ""  # its `(:language ...)` line (LIBERO-PRO writes a perturbed instruction only there)
 
+    def placed(self) -> dict[str, str]:
+        """What each object stands on or in at the start: {instance: region or object}, from :init's
+        `(On x y)` and `(In x y)`."""
+        return {pred[1]: pred[2] for pred in self.init if pred[0].lower() in ("on", "in")}
+
     def region_of(self, instance: str) -> str:
         """The region an object is placed in (`(On x floor_<region>)` in :init)."""
         names = {f"{self.targets.get(r, '')}_{r}": r for r in self.regions}

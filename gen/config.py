@@ -97,8 +97,8 @@ def validate(cfg: GenConfig) -> None:
         _validate_mix(cfg)
         return
     if cfg.confound is not None and not isinstance(cfg.confound, str):
-        listed = mix.listed(cfg.confound).removeprefix("referent=")
-        raise UserError(f"confound={listed} is one per type of a referent list; {cfg.referent} is one type: give one")
+        listed = mix.listed(cfg.confound, "confound")
+        raise UserError(f"{listed} is one per type of a referent list; {cfg.referent} is one type: give one")
     world = resolve_world(cfg)
     try:
         profile = layout(cfg.profile or world.profiles[0])
@@ -176,7 +176,7 @@ def _validate_mix(cfg: GenConfig) -> None:
     mix.check_share(cfg.n, names)
     if isinstance(cfg.confound, list) and len(cfg.confound) != len(names):
         raise UserError(
-            f"confound={mix.listed(cfg.confound).removeprefix('referent=')} names {len(cfg.confound)} confounds for the "
+            f"{mix.listed(cfg.confound, 'confound')} names {len(cfg.confound)} confounds for the "
             f"{len(names)} types of {listed_types}: "
             "give one for all of them, or one each (null: that type deconfounded)"
         )

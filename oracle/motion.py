@@ -9,6 +9,8 @@ commanded delta in one step), and before the gripper closes or opens the hand se
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import mujoco
 import numpy as np
 
@@ -103,10 +105,7 @@ class Motion:
         """Grip site along a straight line to `pos` (minimum-jerk timing), e.g. to push."""
         start = self.scene.ee_pos()
         goal = np.asarray(pos, dtype=float)
-        steps = max(2, int(np.ceil(np.linalg.norm(goal - start) / (speed * self.dt))))
-        for k in range(1, steps + 1):
-            tau = k / steps
-            s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+        for s in _minimum_jerk(float(np.linalg.norm(goal - start)) / (speed * self.dt)):
             self.q = self.ik.solve(start + s * (goal - start), self.yaw, seed=self.q, facing=self.facing)
             self._execute(self.q)
 
@@ -115,10 +114,7 @@ class Motion:
         site kept where it is throughout: what turns a knob without pulling on its axis (a joint
         path between two yaws swings the site off it)."""
         start, site = self.yaw, self.scene.ee_pos()
-        steps = max(2, int(np.ceil(abs(yaw - start) / (speed * self.dt))))
-        for k in range(1, steps + 1):
-            tau = k / steps
-            s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+        for s in _minimum_jerk(abs(yaw - start) / (speed * self.dt)):
             self.q = self.ik.solve(site, start + s * (yaw - start), seed=self.q, facing=self.facing)
             self._execute(self.q)
         self.yaw = yaw
@@ -136,3 +132,12 @@ class Motion:
         self._settle(self.q)
         self.gripper = OPEN
         self.hold(steps)
+
+
+def _minimum_jerk(steps: float) -> Iterator[float]:
+    """The fraction of a move done after each of its control steps (at least two, `steps` rounded up)
+    on a minimum-jerk profile: it starts and ends at rest."""
+    count = max(2, int(np.ceil(steps)))
+    for k in range(1, count + 1):
+        tau = k / count
+        yield 10 * tau**3 - 15 * tau**4 + 6 * tau**5

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
 import os
 import shutil
 import subprocess
 import sys
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 
 import mujoco
@@ -26,6 +24,7 @@ from gen.build.canonical import CanonicalOptions, Suite, load_state, suite_of
 from gen.build.run import generate
 from gen.config import parse
 from gen.planning.plan import world_sim
+from jobs.lock import held
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
@@ -185,7 +184,7 @@ class Shared:
         """The folder holding the product of `recipe`, made by `build(folder)` the first time any worker asks."""
         name = hashlib.sha256(json.dumps(list(recipe)).encode()).hexdigest()[:16]
         folder, done = self.root / name, self.root / f"{name}.done"
-        with _locked(self.root / f"{name}.lock"):
+        with held(self.root / f"{name}.lock"):
             if not done.exists():
                 shutil.rmtree(folder, ignore_errors=True)  # what a failed build left
                 folder.mkdir(parents=True)
@@ -227,17 +226,6 @@ def rows_of(exam: Exam, faces: Iterable[str], trials: int | None = None) -> pd.D
     those faces of its report. A trial's rows share one initial state, so its init-value check loses nothing."""
     rows = exam.trials[exam.trials["face"].isin(list(faces))]
     return rows if trials is None else rows[rows["trial"] < trials]
-
-
-@contextmanager
-def _locked(path: Path) -> Iterator[None]:
-    """Hold an exclusive lock on `path` (created if missing) across processes."""
-    with path.open("a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def canonical_reports(shared: Shared, trials: dict[str, int], world: str = "libero_object") -> dict[str, dict]:

@@ -30,19 +30,31 @@ checkpoints in docs/checkpoints/libero-release-lora and docs/checkpoints/libero-
 
 from __future__ import annotations
 
-import fcntl
-import hashlib
 import json
 import shlex
 import sys
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from core.exam import Exam, read
 from gen.config import GenConfig, parse
+from gen.planning import mix
 from jobs.cli import UserError, main
+from jobs.lock import held
 from referents import registry
-from train.stages import WEIGHTS_DIGEST, Ledger, cell, commit, exam_report, generate_once, reference_report, train_once, value
+from train.stages import (
+    WEIGHTS_DIGEST,
+    Ledger,
+    cell,
+    commit,
+    exam_report,
+    generate_once,
+    reference_report,
+    train_once,
+    value,
+    weights_digest,
+)
 
 # axis -> (the mix's item: the type in its LIBERO scene, the confounded arm's confound)
 AXES: dict[str, tuple[str, str]] = {
@@ -121,7 +133,7 @@ def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
             mixed.append(f"confound=[{','.join(AXES[a][1] for a in options.axes)}]")
         stages[f"data {arm}"] = _gen(options, root / "data" / arm, *mixed)
     for axis in options.axes:
-        type_, world = AXES[axis][0].split("@")
+        type_, world = mix.split(AXES[axis][0])
         exam = (f"referent={type_}", f"world={world}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}")
         stages[f"exam {axis}"] = _gen(options, root / "exams" / axis, *exam)
     return stages
@@ -129,8 +141,6 @@ def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
 
 def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """LIBERO's canonical exams (gen.canonical), made once."""
-    import time
-
     from gen.build.canonical import CanonicalOptions, build
 
     made = {}
@@ -199,7 +209,7 @@ def run(options: ReleaseOptions) -> None:
             exams[name.split()[1]] = (read(str(cfg.out)), Path(str(cfg.out)))
     canonical = _canonical(options, ledger, commands) if options.canonical and "deconfounded" in options.arms else {}
     for axis, (exam, folder) in exams.items():
-        type_, world = AXES[axis][0].split("@")
+        type_, world = mix.split(AXES[axis][0])
         if registry.load(type_, world=world).code.named_place is not None:
             out = root / "reports" / "named_place" / axis
             commands.append(f"python -m eval policy=named_place exam={folder} workers=2 out={out}")
@@ -209,10 +219,10 @@ def run(options: ReleaseOptions) -> None:
         _train(options, arm, ledger, commands)
         trained[arm] = root / "ckpt" / arm
         commit(trained[arm] / MODEL_FILE, Path(options.docs) / "checkpoints" / COMMITTED[arm], options.commit_mb)
-        _takes(options, arm, trained[arm], {a: exams[a] for a in options.axes}, "ours", ledger, commands)
+        _takes(options, arm, trained[arm], exams, "ours", ledger, commands)
     for arm, weights in trained.items():
         if arm in options.libero:
-            _takes(options, arm, weights, {a: exams[a] for a in options.axes}, "libero", ledger, commands)
+            _takes(options, arm, weights, exams, "libero", ledger, commands)
     if "deconfounded" in trained:
         named = {f"canonical-{world}": made for world, made in canonical.items()}
         _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, baseline=False)
@@ -249,9 +259,7 @@ class Commands:
         return json.loads(self.path.read_text()) if self.path.is_file() else []
 
     def append(self, line: str) -> None:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path.parent / ".commands.lock", "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
+        with held(self.path.with_name(f".{self.path.name}.lock")):
             lines = self.read()
             if line not in lines:
                 tmp = self.path.with_suffix(".tmp")
@@ -259,18 +267,12 @@ class Commands:
                 tmp.replace(self.path)
 
 
-def _finished(report_dir: Path, weights: Path | None) -> dict | None:
-    """The report in `report_dir` if it was taken with `weights` as they are now (None: a
-    reference policy's, kept while its exam is)."""
-    from train.policy import MODEL_FILE
-
+def _finished(report_dir: Path, digest: str | None) -> dict | None:
+    """The report in `report_dir` if it was taken with the weights `digest` names (`weights_digest`;
+    None: a reference policy's, kept while its exam is)."""
     path, stamp = report_dir / "report.json", report_dir / WEIGHTS_DIGEST
-    if not path.is_file() or not stamp.is_file():
+    if not path.is_file() or not stamp.is_file() or (digest is not None and stamp.read_text() != digest):
         return None
-    if weights is not None:
-        model = weights / MODEL_FILE
-        if not model.is_file() or hashlib.sha256(model.read_bytes()).hexdigest() != stamp.read_text():
-            return None
     return json.loads(path.read_text())
 
 
@@ -291,9 +293,10 @@ def collect(options: ReleaseOptions) -> dict:
             continue
         training[arm] = {"steps": log["steps"], "final_loss": log["final_loss"],
                          "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]]}  # fmt: skip
+        digest = weights_digest(weights)
         for name in [*AXES, *(f"canonical-{w}" for w in CANONICAL)]:
             for sim in SIMS:
-                report = _finished(_report_dir(root, arm, name, sim), weights)
+                report = _finished(_report_dir(root, arm, name, sim), digest)
                 if report is None:
                     continue
                 axis, exam = (name, "axis") if name in AXES else (name.removeprefix("canonical-"), "canonical")

@@ -12,10 +12,8 @@ different sittings.
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
-import os
 import shutil
 import time
 from collections.abc import Callable
@@ -28,6 +26,7 @@ import pandas as pd
 from core.exam import Exam
 from gen.config import GenConfig
 from jobs.cli import UserError
+from jobs.lock import held
 
 if TYPE_CHECKING:
     from train.fit import TrainConfig
@@ -50,17 +49,12 @@ class Ledger:
     def spend(self, stage: str, start: float) -> None:
         """Add the work `stage` did since `start` (a `time.perf_counter()` reading) to the file as it is now."""
         seconds = time.perf_counter() - start
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        lock = os.open(self.path.parent, os.O_RDONLY)
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX)
+        with held(self.path.with_name(f".{self.path.name}.lock")):
             self.spent = self._read()
             self.spent[stage] = round(self.spent.get(stage, 0.0) + seconds, 1)
             tmp = self.path.with_suffix(".tmp")
             tmp.write_text(json.dumps(self.spent, indent=2))
             tmp.replace(self.path)
-        finally:
-            os.close(lock)  # releases the lock
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
@@ -69,9 +63,7 @@ def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
     from gen.build.run import generate
 
     out = Path(str(cfg.out))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with open(out.parent / f".{out.name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    with held(out.parent / f".{out.name}.lock"):
         if (out / "meta").is_dir() or (out / "exam.json").is_file():
             return
         start = time.perf_counter()
@@ -132,16 +124,21 @@ def exam_report(
     `sim=libero`, in LIBERO's own) and read back on later runs while the weights it was taken with
     are still the ones there."""
     from eval.battery import take
-    from train.policy import MODEL_FILE, CheckpointPolicy
-
-    digest = hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
+    from train.policy import CheckpointPolicy
 
     def run() -> None:
         policy = CheckpointPolicy(str(weights), replan)
         options = {"replan": replan}
         take(exam, rows, policy, out, 2, f"ckpt:{weights}", baseline=baseline, policy_options=options, resume=True, sim=sim)
 
-    return _once(out, digest, run, ledger, stage)
+    return _once(out, weights_digest(weights), run, ledger, stage)
+
+
+def weights_digest(weights: Path) -> str:
+    """What a checkpoint's reports are stamped with (`WEIGHTS_DIGEST`): its final weights' sha256."""
+    from train.policy import MODEL_FILE
+
+    return hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
 
 
 def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: str) -> dict:
@@ -161,9 +158,7 @@ def _once(out: Path, digest: str, run: Callable[[], None], ledger: Ledger, stage
     """`out`'s report, taken by `run` unless the one there was taken from what `digest` names (two
     processes that both need it: one takes it while the other waits)."""
     stamp = out / WEIGHTS_DIGEST
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with open(out.parent / f".{out.name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    with held(out.parent / f".{out.name}.lock"):
         if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
             start = time.perf_counter()
             run()

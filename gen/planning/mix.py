@@ -96,6 +96,6 @@ def share(items: Sequence[T], place: int, k: int) -> list[T]:
     return list(items[place::k])
 
 
-def listed(names: Sequence[Any]) -> str:
-    """The list as `referent=` spells it, for one-line messages."""
-    return f"referent=[{','.join(map(str, names))}]"
+def listed(names: Sequence[Any], option: str = "referent") -> str:
+    """The list as `referent=` (or another list option, e.g. `confound=`) spells it, for one-line messages."""
+    return f"{option}=[{','.join(map(str, names))}]"

@@ -134,7 +134,7 @@ def _liberos_pairs(cfg: ReferentConfig) -> list[tuple[str, str]]:
     suite, pairs = worlds.world(cfg.world).suite, []
     for task in libero.tasks(suite):
         problem = libero.problem(suite, task)
-        where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+        where = problem.placed()
         target = problem.goal[0][1]  # (On <bowl> plate_1)
         other = [i for i, k in problem.objects.items() if k == _bowl(cfg).kind and i != target]
         if where.get(target) in at and len(other) == 1 and where.get(other[0]) in at:
@@ -194,7 +194,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
             region = region.replace(f"_{kind}_", f"_{base}_")
         return region
 
-    where = {pred[1]: plain(pred[2]) for pred in problem.init if pred[0].lower() in ("on", "in")}
+    where = {instance: plain(on) for instance, on in problem.placed().items()}
     target = problem.goal[0][1]  # (On <bowl> plate_1)
     bowl = _bowl(cfg).kind
     placements = []
@@ -236,7 +236,7 @@ def shortcut(cfg: ReferentConfig, spec: EpisodeSpec) -> EpisodeSpec:
     layouts = []
     for task in libero.tasks(suite):
         problem = libero.problem(suite, task)
-        where = {pred[1]: pred[2] for pred in problem.init if pred[0].lower() in ("on", "in")}
+        where = problem.placed()
         named = where[problem.goal[0][1]]
         layouts.append(({where[i] for i, k in problem.objects.items() if k == bowl}, named))
     remembered = next((named for regions, named in layouts if regions == set(bowls)), None)
