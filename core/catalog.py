@@ -43,7 +43,10 @@ class Kind:
     take their RGBA from the object's `color` attribute. Destinations (plate, basket) are placed
     on, not grasped; `inner` is the half-width of the area an object must land in, and a
     container's `contain` box (centre offset from the body origin, half size) is the volume an
-    object's origin must be in to be in it (LIBERO's `In`).
+    object's origin must be in to be in it (LIBERO's `In`). `contain_quat` is the orientation, at
+    rest, of LIBERO's region site that box stands for: LIBERO's `in_box` takes a turned container's
+    box along the world's axes with extents |R half| (R the site's orientation, half its size), so
+    a basket knocked askew by a dropped grocery holds what LIBERO says it holds (core/success.py).
     """
 
     name: str
@@ -56,6 +59,7 @@ class Kind:
     inner: float = 0.0
     quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # resting orientation (w, x, y, z) before the object's yaw
     contain: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # (centre offset, half size)
+    contain_quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # LIBERO's region site, at rest (before the object's yaw)
     rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)

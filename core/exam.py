@@ -128,6 +128,8 @@ def geometry(world: str = "native") -> dict[str, dict[str, Any]]:
             out[k.name]["rim"] = k.rim
         if k.contain is not None:
             out[k.name]["contain"] = {"offset": list(k.contain[0]), "half_size": list(k.contain[1])}
+            if k.contain_quat != (1.0, 0.0, 0.0, 0.0):
+                out[k.name]["contain"]["quat"] = list(k.contain_quat)
         if k.quat != (1.0, 0.0, 0.0, 0.0):
             out[k.name]["rest_quat"] = list(k.quat)
     return out

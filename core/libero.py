@@ -8,7 +8,7 @@ install locations and parsed here, so planning a LIBERO world needs no simulator
 
 The object kinds are LIBERO's own categories. Their geometry is measured from each model's
 collision boxes in its resting orientation (the orientation LIBERO's placement gives it, read
-off LIBERO's initial states); tests/test_libero_world.py checks it against the compiled models.
+off LIBERO's initial states); tests/libero/test_libero_world.py checks it against the compiled models.
 """
 
 from __future__ import annotations
@@ -111,8 +111,10 @@ KINDS: dict[str, Kind] = {
             # triangles 21/255 (agentview) and 27/255 (wrist) from LIBERO's inside its pixels, 28 and 32 at 15,000
             params={"xml": "stable_scanned_objects/basket/basket.xml", "faces": 25000},
             quat=(HALF, 0.0, 0.0, HALF),
-            # LIBERO's `contain_region` site: `In(x, basket_1_contain_region)` is x's origin inside this box
+            # LIBERO's `contain_region` site: `In(x, basket_1_contain_region)` is x's origin inside this box;
+            # the site is turned a half turn against the basket's body (a quarter turn back, in the world)
             contain=((0.0, 0.0, 0.07185), (0.06108, 0.06108, 0.06949)),
+            contain_quat=(HALF, 0.0, 0.0, -HALF),
         ),
         # LIBERO-Spatial's table: the bowls are picked by the rim (`rim`: the wall's distance from the
         # centre), the plate is where they go (LIBERO's `On` wants the bowl's origin within 3 cm of its)

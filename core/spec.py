@@ -264,6 +264,17 @@ def yaw_quat(yaw: float, rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> tupl
     return (c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w)
 
 
+def quat_matrix(quat: tuple[float, ...] | list[float]) -> list[list[float]]:
+    """The rotation matrix of the orientation (w, x, y, z) (normalised first: logged quaternions
+    carry float rounding)."""
+    w, x, y, z = (v / math.sqrt(sum(c * c for c in quat)) for v in quat)
+    return [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+
+
 def yaw_of(quat: tuple[float, ...] | list[float], rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> float:
     """The turn about the world's z that takes the resting orientation `rest` to `quat` (the
     inverse of `yaw_quat`, for orientations that differ by such a turn)."""

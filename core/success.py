@@ -10,7 +10,8 @@ scorer judges logged rollouts with the same predicates.
 * place — the carried object (`params.object`) rests inside the target destination's footprint
           and is not held above it; the destination itself stayed put.
 * pick_place — the target ends inside the container `params.destination`: its origin in the
-          container's `contain` box (LIBERO's `In` predicate, as LIBERO-Object's goals use it).
+          container's `contain` box (LIBERO's `In` predicate, as LIBERO-Object's goals use it),
+          turned as LIBERO turns it where the basket's orientation is known (`_in_box`).
 * pick_place_on — the target ends on `params.destination`: LIBERO's `On` (as LIBERO-Spatial's
           goals use it): its origin within 3 cm of the destination's (horizontally) and not below
           it, and resting on it (its bottom at most 2 cm above the destination's top: positions
@@ -28,12 +29,12 @@ scorer judges logged rollouts with the same predicates.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from core import worlds
-from core.spec import EpisodeSpec
+from core.spec import EpisodeSpec, quat_matrix, yaw_quat
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
 PUSH_MARGIN = 0.05
@@ -48,11 +49,13 @@ TURN_ON = 0.5  # LIBERO's flat stove: on from this knob angle (radians)
 
 @dataclass(frozen=True)
 class Outcome:
-    """Where every object started and ended, and where the end effector finished."""
+    """Where every object started and ended, where the end effector finished, and how the
+    containers that move (a basket) ended turned, where that was recorded."""
 
     start: dict[str, tuple[float, float, float]]
     end: dict[str, tuple[float, float, float]]
     ee: tuple[float, float, float]
+    turns: dict[str, tuple[float, ...]] = field(default_factory=dict)  # object -> its end orientation (w, x, y, z)
 
     def rise(self, object_id: str) -> float:
         return self.end[object_id][2] - self.start[object_id][2]
@@ -103,11 +106,18 @@ def _on_tilted(spec: EpisodeSpec, outcome: Outcome, thing: str, place: str) -> b
 
 
 def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, floor: float) -> bool:
-    """Whether `thing`'s origin ends in `container`'s `contain` box, its floor lowered by `floor`."""
-    kind = worlds.kind(spec.object(container).kind, spec.sim.world)
+    """Whether `thing`'s origin ends in `container`'s `contain` box, its floor lowered by `floor`.
+    A container whose end orientation is known (`Outcome.turns`) has its box where LIBERO's `in_box`
+    puts its region site's: the offset turned with it, the extents |R half| along the world's axes
+    (R the site's orientation, `Kind.contain_quat` turned as the container turned)."""
+    placed = spec.object(container)
+    kind = worlds.kind(placed.kind, spec.sim.world)
     if kind.contain is None:
         raise ValueError(f"{kind.name} is not a container (no contain box)")
     offset, half = (np.asarray(v) for v in kind.contain)
+    if container in outcome.turns:
+        turn = np.asarray(quat_matrix(outcome.turns[container])) @ np.asarray(quat_matrix(yaw_quat(placed.yaw, kind.quat))).T
+        offset, half = turn @ offset, np.abs(turn @ np.asarray(quat_matrix(yaw_quat(placed.yaw, kind.contain_quat))) @ half)
     d = np.asarray(outcome.end[thing]) - (np.asarray(outcome.end[container]) + offset)
     return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - floor < d[2] < half[2])
 

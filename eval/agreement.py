@@ -46,10 +46,10 @@ def outcomes(exam: Exam, logs: pd.DataFrame) -> tuple[dict[int, object], dict[in
     parsed, did, achieved = parsed_logs(logs, exam), {}, {}
     for _, row in exam.trials.iterrows():
         r = int(row["row"])
-        ee, objects, error, *_ = parsed[r]
-        judged = judge(exam, row, ee, objects)
-        achieved[r] = not error and judged[(row["target"], row["program"])]["achieved"]
-        did[r] = (None if error else landed(judged)) if row["face"] == "swap" else achieved[r]
+        log = parsed[r]
+        judged = judge(exam, row, log.ee, log.objects, turns=log.turns)
+        achieved[r] = not log.error and judged[(row["target"], row["program"])]["achieved"]
+        did[r] = (None if log.error else landed(judged)) if row["face"] == "swap" else achieved[r]
     return did, achieved
 
 

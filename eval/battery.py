@@ -6,7 +6,7 @@ report carries the measured shortcut beside it: the `position` reference policy'
 same rollouts, run once per exam and kept in the cache (`shortcut_baseline`).
 
 A take runs for hours on a canonical exam, so every finished rollout is kept at once, one file
-each, in a partial run beside `out` (gen/partial.py, locked while a take works on it): an
+each, in a partial run beside `out` (jobs/partial.py, locked while a take works on it): an
 interrupted take loses only the rollouts in flight, and `resume` runs only the missing ones, to
 the same report. The reports reach `out` only when every rollout is done; a take that fails
 before any rollout is finished leaves no partial run behind.
@@ -46,7 +46,7 @@ REPORT_FILES = (*REPORTS, ROLLOUTS)  # what a take writes to `out`, all it ever 
 
 
 def _worker(parent: int) -> None:
-    """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/workers.py)."""
+    """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/build/workers.py)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with(parent)
 

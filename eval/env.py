@@ -113,7 +113,7 @@ class ExamEnv(gym.Env):
             raise ValueError(problem)
         self.scene.step(valid)
         self._t += 1
-        outcome = Outcome(self._start, self.scene.positions(), tuple(self.scene.ee_pos()))
+        outcome = Outcome(self._start, self.scene.positions(), tuple(self.scene.ee_pos()), self.scene.turns())
         done = achieved(self.episode, outcome, self.row["target"], self.row["program"])
         info = {**self._info(), "achieved": done}
         return self._obs(), float(done), False, self._t >= int(self.row["max_steps"]), info

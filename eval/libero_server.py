@@ -292,6 +292,9 @@ class Server:
                 [data.body_xpos[model.body_name2id(self.env.env.objects_dict[o].root_body)] for o in objects]
                 + [anchored(model, data, s) for s in sites]
             ).reshape(-1, 3),
+            "quats": np.array(
+                [data.body_xquat[model.body_name2id(self.env.env.objects_dict[o].root_body)] for o in objects]
+            ).reshape(-1, 4),
         }
         return {}, out
 

@@ -280,6 +280,13 @@ class LiberoSim:
         assert self.setup is not None
         return {i: tuple(float(v) for v in p) for i, p in zip(self.setup.ids, self._now["objects"])}
 
+    def turns(self) -> dict[str, tuple[float, ...]]:
+        """How each movable container (a basket) is turned now: its body's orientation in LIBERO."""
+        assert self.setup is not None and self.spec is not None
+        ids = self.setup.ids[: len(self.setup.objects)]
+        containers = {o.id for o in self.spec.objects if self.rows.world.kind(o.kind).contain is not None}
+        return {i: tuple(float(v) for v in q) for i, q in zip(ids, self._now["quats"]) if i in containers}
+
     def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
         from oracle.scene import axis_angle
 

@@ -35,6 +35,7 @@ class Log:
     row: int
     ee: list[list[float]] = field(default_factory=list)
     objects: dict[str, list[list[float]]] = field(default_factory=dict)
+    turns: dict[str, list[list[float]]] = field(default_factory=dict)  # movable containers' orientations (w, x, y, z)
     error: str | None = None
     located: list[float] | None = None
     predicted: list[float] | None = None  # [column, row] in the agentview frame, with the first chunk
@@ -48,6 +49,8 @@ class Log:
         self.ee.append([float(v) for v in scene.ee_pos()])
         for k, pos in scene.positions().items():
             self.objects.setdefault(k, []).append(list(pos))
+        for k, quat in scene.turns().items():
+            self.turns.setdefault(k, []).append(list(quat))
 
     def to_row(self) -> dict:
         verdict = {} if self.sim_success is None else {SIM_SUCCESS: self.sim_success}
@@ -56,6 +59,7 @@ class Log:
             "steps": self.steps,
             "ee": self.ee,
             "objects": json.dumps(self.objects),
+            "turns": json.dumps(self.turns),
             "error": self.error,
             "located": self.located,
             "predicted": self.predicted,
@@ -138,6 +142,8 @@ class Sim(Protocol):
 
     def positions(self) -> dict[str, tuple[float, ...]]: ...
 
+    def turns(self) -> dict[str, tuple[float, ...]]: ...
+
     def observe(self, instruction: str, occluded: bool, images: bool) -> dict: ...
 
     def verdict(self, row: pd.Series) -> bool | None: ...
@@ -176,6 +182,9 @@ class OurSim:
 
     def positions(self) -> dict[str, tuple[float, float, float]]:
         return self._scene.positions()
+
+    def turns(self) -> dict[str, tuple[float, ...]]:
+        return self._scene.turns()
 
     def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
         return observe(self._scene, self.cameras if images else None, instruction, occluded)

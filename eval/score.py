@@ -115,13 +115,24 @@ def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: 
     return contact.distance(kind, objects[target], ee, carried)
 
 
-def judge(exam: Exam, row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], steps: int | None = None) -> dict:
+def judge(
+    exam: Exam,
+    row: pd.Series,
+    ee: np.ndarray,
+    objects: dict[str, np.ndarray],
+    steps: int | None = None,
+    turns: dict[str, np.ndarray] | None = None,
+) -> dict:
     """What one rollout did to each thing it could have done, judged up to `steps` (default: all
-    of it): the row's alternatives and every other object the hand can land on (`landable`)."""
+    of it): the row's alternatives and every other object the hand can land on (`landable`).
+    `turns`: the movable containers' orientations, where logged (a turned basket's box turns)."""
     spec = EpisodeSpec.from_json(row["spec"])
     end = len(ee) - 1 if steps is None else steps
     outcome = Outcome(
-        {k: tuple(v[0]) for k, v in objects.items()}, {k: tuple(v[end]) for k, v in objects.items()}, tuple(ee[end])
+        {k: tuple(v[0]) for k, v in objects.items()},
+        {k: tuple(v[end]) for k, v in objects.items()},
+        tuple(ee[end]),
+        {k: tuple(v[end]) for k, v in (turns or {}).items()},
     )
     alternatives = [(a["target"], a["program"]) for a in json.loads(row["alternatives"])]
     result = {}
@@ -166,6 +177,7 @@ class Logged(NamedTuple):
     error: str | None
     located: np.ndarray | None  # (3,): where the policy believes the named object stands
     predicted: np.ndarray | None  # (2,): [column, row] in the agentview frame, where it predicts its motion will go
+    turns: dict[str, np.ndarray]  # movable container id -> (steps + 1, 4) orientations (w, x, y, z), where logged
 
 
 def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
@@ -203,8 +215,30 @@ def parsed_logs(logs: pd.DataFrame, exam: Exam) -> dict[int, Logged]:
                     f"row {log['row']}: step 0 is not the trial's recorded initial state ({name} is {where}) "
                     "nor where reset() leaves it after the settle steps; log step 0 before any action"
                 )
-        parsed[int(log["row"])] = Logged(ee, objects, error, _optional(log, "located", 3), _optional(log, "predicted", 2))
+        turns = _turns(log, len(ee))
+        parsed[int(log["row"])] = Logged(ee, objects, error, _optional(log, "located", 3), _optional(log, "predicted", 2), turns)
     return parsed
+
+
+def _turns(log: pd.Series, steps: int) -> dict[str, np.ndarray]:
+    """The optional `turns` column: {container id: [[w, x, y, z], ...]}, one orientation per
+    end-effector position (logs without it judge containers at rest, as before it was logged)."""
+    value = log.get("turns")
+    if value is None or (np.ndim(value) == 0 and pd.isna(value)):
+        return {}
+    try:
+        decoded = json.loads(value)
+        if not isinstance(decoded, dict):
+            raise TypeError
+        turns = {str(k): np.asarray(v, float).reshape(-1, 4) for k, v in decoded.items()}
+    except (TypeError, ValueError):
+        raise LogError(
+            f"column 'turns' must hold a JSON string {{object id: [[w, x, y, z], ...]}} per rollout; row {log['row']} "
+            f"has a {type(value).__name__}"
+        ) from None
+    if any(len(v) != steps for v in turns.values()):
+        raise LogError(f"row {log['row']}: every turned container needs one orientation per end-effector position")
+    return turns
 
 
 def _optional(log: pd.Series, column: str, size: int) -> np.ndarray | None:
@@ -284,9 +318,9 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
     judged_by_sim: dict[str, list[tuple[float, int]]] = defaultdict(list)
     errors = []
     for _, row in exam.trials.iterrows():
-        ee, objects, error, located, predicted = parsed[int(row["row"])]
-        judged = judge(exam, row, ee, objects)
-        at_start = judge(exam, row, ee, objects, steps=0)
+        ee, objects, error, located, predicted, turns = parsed[int(row["row"])]
+        judged = judge(exam, row, ee, objects, turns=turns)
+        at_start = judge(exam, row, ee, objects, steps=0, turns=turns)
         asked = (row["target"], row["program"])
         original = (row["original_target"], row["original_program"])
         if error:
@@ -497,8 +531,9 @@ def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
     obeyed name: what lets two policies' swaps be compared row by row."""
     parsed, obeyed = parsed_logs(logs, exam), {}
     for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
-        ee, objects, error, *_ = parsed[int(row["row"])]
-        obeyed[int(row["row"])] = not error and landed(judge(exam, row, ee, objects)) == (row["target"], row["program"])
+        log = parsed[int(row["row"])]
+        judged = judge(exam, row, log.ee, log.objects, turns=log.turns)
+        obeyed[int(row["row"])] = not log.error and landed(judged) == (row["target"], row["program"])
     return obeyed
 
 

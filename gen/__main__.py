@@ -31,7 +31,7 @@ def generate(cfg: GenConfig) -> None:
 
 
 def _kept(cfg: GenConfig) -> str:
-    """What an interrupted run leaves: the finished episodes its partial run keeps (gen/partial.py)."""
+    """What an interrupted run leaves: the finished episodes its partial run keeps (jobs/partial.py)."""
     from pathlib import Path
 
     from jobs.partial import Partial

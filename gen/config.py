@@ -1,6 +1,6 @@
 """The generator's options (`python -m gen key=value ...`) and their validation.
 
-Every problem with the input becomes a `UserError` (gen/cli.py) whose message is one line
+Every problem with the input becomes a `UserError` (jobs/cli.py) whose message is one line
 naming it; the CLI prints that line and exits non-zero before anything is written.
 """
 
@@ -33,7 +33,7 @@ class GenConfig:
     seed: int = 0  # non-negative; the same seed and options give byte-identical output
     out: Optional[str] = None  # default datasets/<referent>, or datasets/<referent>-<world> in another world (exam: ...-exam)
     overwrite: bool = False  # replace a non-empty `out`
-    resume: bool = False  # continue a killed run of the same options (see gen/partial.py)
+    resume: bool = False  # continue a killed run of the same options (see jobs/partial.py)
     image_size: Optional[int] = None  # square camera frames, pixels; default: the profile's (native 128, libero 256)
     fps: int = 20  # control and recording rate
     codec: str = "h264"  # h264 | av1
@@ -67,7 +67,7 @@ class GenConfig:
 
     def shares(self) -> list[GenConfig]:
         """The options of each referent type the run plans: this run's own for one type; for a list
-        (one dataset mixing them, gen/mix.py), each type with its equal share of `n`."""
+        (one dataset mixing them, gen/planning/mix.py), each type with its equal share of `n`."""
         if isinstance(self.referent, str):
             return [self]
         shares = []
@@ -146,7 +146,7 @@ def validate(cfg: GenConfig) -> None:
         name = cfg.referent if cfg.world == registry.world_of(cfg.referent, cfg.spec) else f"{cfg.referent}-{cfg.world}"
         cfg.out = str(Path("datasets") / (name if cfg.split == "train" else f"{name}-exam"))
     try:
-        if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/run.py)
+        if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/build/run.py)
             check_output(Path(cfg.out), cfg.overwrite)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None
@@ -154,7 +154,7 @@ def validate(cfg: GenConfig) -> None:
 
 
 def _validate_mix(cfg: GenConfig) -> None:
-    """A list of referent types (gen/mix.py): each type is validated as its own run would be (its
+    """A list of referent types (gen/planning/mix.py): each type is validated as its own run would be (its
     share of `n`, into the same `out`), then they must record the same features and be different
     types where they are laid out."""
     names = mix.types(cfg.referent)

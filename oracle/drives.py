@@ -76,7 +76,7 @@ class OscPose:
     computed by robosuite's own functions (`opspace_matrices`, `nullspace_torques`,
     `orientation_error`, the axis-angle and quaternion conversions) on the scene's state read
     directly: robosuite's controller object spends most of a step looking names up and copying
-    arrays. tests/test_libero.py checks that both drive the arm along the same path (to 1e-9)."""
+    arrays. tests/sim/test_libero.py checks that both drive the arm along the same path (to 1e-9)."""
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, arm_joints: tuple[str, ...], ee_site: str) -> None:
         ids = [model.joint(j).id for j in arm_joints]

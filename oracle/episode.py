@@ -33,7 +33,7 @@ class Demo:
 
 def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outcome:
     ee = scene.ee_pos()
-    return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])))
+    return Outcome(start, scene.positions(), (float(ee[0]), float(ee[1]), float(ee[2])), scene.turns())
 
 
 def demonstrate(

@@ -477,6 +477,12 @@ class Scene:
         """Where every object of the episode is now."""
         return {k: tuple(float(v) for v in self.object_pos(k)) for k in self.placed}
 
+    def turns(self) -> dict[str, tuple[float, ...]]:
+        """How each container that can move (a basket) is turned now (w, x, y, z): LIBERO's `In`
+        turns its box with it (core/success.py)."""
+        movable = (k for k, b in self.placed.items() if b.kind.contain is not None and not b.fixed)
+        return {k: tuple(float(v) for v in self.data.xquat[self.placed[k].body_id]) for k in movable}
+
     def object_yaw(self, object_id: str) -> float:
         """How far the object is turned about the world's z from its resting orientation."""
         body = self.placed[object_id]

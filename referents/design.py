@@ -1,6 +1,6 @@
 """What a referent type's `design` returns: the discrete choices of one episode (which objects,
 in which slots, which is the target, the instruction and its counterfactuals). Poses are
-realised from them in gen/plan.py, so re-realising a failed demo never changes a role."""
+realised from them in gen/planning/plan.py, so re-realising a failed demo never changes a role."""
 
 from __future__ import annotations
 

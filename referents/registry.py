@@ -81,7 +81,7 @@ class Referent:
     @property
     def label(self) -> str:
         """The type, and its world where that is not the type's own (`color@libero_spatial`): what
-        names it in a mix of types (gen/mix.py)."""
+        names it in a mix of types (gen/planning/mix.py)."""
         own = world_of(self.name) if self.name in available() else self.config.world
         return self.name if self.config.world == own else f"{self.name}@{self.config.world}"
 

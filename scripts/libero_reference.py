@@ -32,6 +32,11 @@ Commands (the request is JSON; what comes back is written to <out>):
   `<array>:<name>` for every body's mass and inertia, every joint's damping, armature,
   friction loss and range, every colliding geom's shape, pose, friction and contact
   parameters, every actuator's gains and ranges, the cameras and the solver options.
+* `contain` — {"task", "state", "container", "thing", "cases": [{"quat", "offset"}, ...]}: in
+  LIBERO-Object's task at its initial state, for each case the container's body turned to `quat`
+  (w, x, y, z) where it stands and the thing's body put `offset` from it, then `forward` (no step);
+  <out> (.json) gets per case LIBERO's `In(<thing>, <container>_contain_region)` and both
+  bodies' positions and the container's orientation as MuJoCo then has them.
 * `bench` — {"suite", "task", "size", "steps"}: LIBERO's own path to a recorded frame,
   `OffScreenRenderEnv.step` with both cameras' observations, timed; <out> (.npz) gets the
   frames (the recording is done by the caller, with lerobot's writer) and the seconds per step.
@@ -266,6 +271,33 @@ def model(request: dict, out: str) -> None:
     env.close()
 
 
+def contain(request: dict, out: str) -> None:
+    bddl, states = task_bddl("libero_object", request["task"])
+    env = make_env(bddl, 32, cameras=False)
+    env.set_init_state(states[request["state"]])
+    sim, inner = env.sim, env.env
+    model, data = sim.model, sim.data
+    bodies = {k: inner.objects_dict[request[k]].root_body for k in ("container", "thing")}
+    joints = {k: model.get_joint_qpos_addr(inner.objects_dict[request[k]].joints[-1])[0] for k in bodies}
+    region = f"{request['container']}_contain_region"
+    results = []
+    for case in request["cases"]:
+        data.qpos[joints["container"] + 3 : joints["container"] + 7] = case["quat"]
+        data.qpos[joints["thing"] : joints["thing"] + 3] = (
+            data.qpos[joints["container"] : joints["container"] + 3] + case["offset"]
+        )
+        sim.forward()
+        body = {k: model.body_name2id(b) for k, b in bodies.items()}
+        results.append({
+            "libero_in": bool(inner._eval_predicate(["in", request["thing"], region])),
+            "container": data.body_xpos[body["container"]].tolist(),
+            "quat": data.body_xquat[body["container"]].tolist(),
+            "thing": data.body_xpos[body["thing"]].tolist(),
+        })  # fmt: skip
+    env.close()
+    Path(out).write_text(json.dumps(results))
+
+
 def bench(request: dict, out: str) -> None:
     """Episodes of `lengths` steps with both cameras' observations, each from a reset environment
     set to the task's first initial state; only the steps are timed (resets are not: LIBERO's
@@ -294,4 +326,5 @@ if __name__ == "__main__":
     command, request_path, out_path = sys.argv[1:4]
     with open(request_path) as f:
         request = json.load(f)
-    {"render": render, "replay": replay, "scenes": scenes, "model": model, "bench": bench}[command](request, out_path)
+    commands = {"render": render, "replay": replay, "scenes": scenes, "model": model, "contain": contain, "bench": bench}
+    commands[command](request, out_path)

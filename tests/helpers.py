@@ -241,7 +241,7 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
     joints and recorded actions; `target` is what moves and `container` where it goes. A world
     with fixtures replays in its suite's own scene, the fixtures where the records stand them. A
-    dataset mixing worlds (gen/mix.py) gives the episodes of `world`."""
+    dataset mixing worlds (gen/planning/mix.py) gives the episodes of `world`."""
     from core.layout import ACTION_KEY
     from gen.build import scenes
     from gen.lerobot.reader import LeRobotReader

@@ -23,7 +23,7 @@ Checkpoints whose trainable weights fit in `commit_mb` are copied to `docs/check
 the exam can be re-run without retraining. Every stage whose output already exists is reused
 (a report while the weights it was taken with are unchanged), so a killed experiment continues
 where it stopped, and a larger `steps=` continues finished training runs from their last state
-before the cool-down (the same as training that long from the start: tests/test_train.py).
+before the cool-down (the same as training that long from the start: tests/sim/test_train.py).
 `train=false` writes the docs from the finished runs alone.
 """
 

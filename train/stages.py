@@ -2,7 +2,8 @@
 once and reused, so a killed experiment continues where it stopped and its parts can run in
 different sittings.
 
-* a dataset or exam is generated only if its folder holds none;
+* a dataset or exam is generated only if its folder holds none, and refused if it holds one made
+  with other options (the next invocation's options are the ones a reader believes);
 * a training run continues from its last matching state (`resume=true`, train/fit.py) and is
   skipped when finished on the same recipe (`recipe`);
 * an exam report is taken once, and read back while the weights it was taken with (their
@@ -58,17 +59,35 @@ class Ledger:
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
-    """Generate `cfg`'s dataset or exam unless its folder already holds a finished one (two
-    experiment processes on one `out` that both need it: one makes it while the other waits)."""
+    """Generate `cfg`'s dataset or exam unless its folder already holds it (two experiment
+    processes on one `out` that both need it: one makes it while the other waits)."""
     from gen.build.run import generate
 
     out = Path(str(cfg.out))
     with held(out.parent / f".{out.name}.lock"):
-        if (out / "meta").is_dir() or (out / "exam.json").is_file():
+        if made(cfg, out):
             return
         start = time.perf_counter()
         generate(cfg)
         ledger.spend(stage, start)
+
+
+def made(cfg: GenConfig, out: Path) -> bool:
+    """Whether `out` holds the finished product `cfg` describes; one made with other options is
+    refused (one line naming both), never silently reused."""
+    from gen.build.dataset import already_complete
+    from gen.build.provenance import Provenance
+    from jobs.partial import completed
+
+    if (out / "exam.json").is_file():
+        there, wanted = json.loads((out / "exam.json").read_text()).get("command"), Provenance(cfg, {}).command()
+        if there != wanted:
+            raise UserError(f"{out} holds the exam `{there}`, not `{wanted}`; choose another out= or remove it")
+        return True
+    if (generation := completed(out)) is not None:
+        already_complete(cfg, out, generation)
+        return True
+    return False
 
 
 def train_once(cfg: TrainConfig, ledger: Ledger, stage: str, allowed: bool = True) -> dict | None:
@@ -185,7 +204,9 @@ def commit(model: Path, folder: Path, limit_mb: float) -> str | None:
 
 def value(v: object) -> str:
     """An option's value as it is written on the command line."""
-    return f"[{','.join(map(str, v))}]" if isinstance(v, list) else str(v)
+    if isinstance(v, list):
+        return f"[{','.join(map(str, v))}]"
+    return str(v).lower() if isinstance(v, bool) else str(v)
 
 
 def cell(face: dict) -> str:

@@ -5,7 +5,7 @@ its objects: the black bowl, the cream cheese, the wine bottle and the plate.
 
 Every value here is LIBERO's, from the suite's BDDL files (the fixtures at the centres of their
 regions; LIBERO draws them anew at every reset within 2 cm) and envs/objects/; the wine rack's
-body stands higher than the others' (LIBERO's placement puts it there); tests/test_libero_goal.py
+body stands higher than the others' (LIBERO's placement puts it there); tests/libero/test_libero_goal.py
 compares the compiled scene and its pictures with LIBERO's own environment.
 """
 

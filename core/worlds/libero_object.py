@@ -4,7 +4,7 @@ and the robot's eye-in-hand camera, LIBERO's groceries and basket (core/libero.p
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_floor_manipulation.py,
 envs/robots/on_the_ground_panda.py, envs/arenas/empty_arena.py and bddl_base_domain.py;
-tests/test_libero_world.py compares the compiled scene, its pictures and its physics with
+tests/libero/test_libero_world.py compares the compiled scene, its pictures and its physics with
 LIBERO's own environment.
 """
 

@@ -7,7 +7,7 @@ plate, ramekin and cookie box (core/libero.py).
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_tabletop_manipulation.py,
 envs/robots/mounted_panda.py, envs/bddl_base_domain.py and the suite's BDDL files (the fixtures
 at the centres of their regions, the cabinet turned by the middle of its yaw range: LIBERO draws
-both anew within them at every reset, within 1 cm and 2 degrees); tests/test_libero_world.py
+both anew within them at every reset, within 1 cm and 2 degrees); tests/libero/test_libero_world.py
 compares the compiled scene, its pictures and its physics with LIBERO's own environment.
 """
 

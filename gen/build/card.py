@@ -77,7 +77,7 @@ def plan_contents(episodes: int) -> str:
 
 def write(root: Path, audited: Sequence[tuple[Referent, dict]], provenance: Provenance, contents: str) -> None:
     """The card of a dataset or a plan, given each referent type with its audit (several: a mix,
-    gen/mix.py); `contents` says which and how much. A contact sheet (`preview.png`) beside it is
+    gen/planning/mix.py); `contents` says which and how much. A contact sheet (`preview.png`) beside it is
     shown at the top."""
     sheet = (
         f"\n![The first frame of the first episodes, with their instructions]({PREVIEW_PATH})\n"

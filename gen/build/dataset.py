@@ -1,6 +1,6 @@
 """The dataset builder: an audited plan -> verified oracle demos -> a LeRobot v3.0 dataset.
 
-Episodes are produced into a resumable partial folder beside `out` (gen/partial.py), assembled
+Episodes are produced into a resumable partial folder beside `out` (jobs/partial.py), assembled
 into the LeRobot files only once all exist, audited again as written, and moved to `out` in one
 rename with `meta/generation.json` inside, so an interrupted run never leaves a half-written
 dataset at `out` and never destroys the one that was there.
@@ -88,7 +88,7 @@ def audits(planned: Planned, written: list[EpisodeSpec] | None = None) -> list[t
 
 
 def verdict(audited: list[tuple[Referent, dict]]) -> str:
-    """The audits' verdict; a mix's (gen/mix.py) names each type's."""
+    """The audits' verdict; a mix's (gen/planning/mix.py) names each type's."""
     if len(audited) == 1:
         return audited[0][1]["verdict"]
     return "; ".join(f"{referent.label}: {report['verdict']}" for referent, report in audited)

@@ -71,7 +71,7 @@ class Provenance:
 
     @classmethod
     def of(cls, cfg: GenConfig, types: Sequence[Referent]) -> Provenance:
-        """A mix of types (gen/mix.py) records each one's spec, by type."""
+        """A mix of types (gen/planning/mix.py) records each one's spec, by type."""
         if len(types) == 1:
             return cls(cfg, asdict(types[0].config))
         return cls(cfg, {referent.label: asdict(referent.config) for referent in types})
@@ -115,7 +115,7 @@ class Provenance:
 
     def exam_command(self) -> str:
         """The held-out exam for a dataset: same referent and options, exam split, another seed;
-        for a mix of types (gen/mix.py) one line per type, each type's exam."""
+        for a mix of types (gen/planning/mix.py) one line per type, each type's exam."""
         kept = [text for name, text in self._options() if name not in NOT_INHERITED_BY_EXAM and name != "world"]
         lines = []
         for one in self.config.shares():

@@ -1,8 +1,8 @@
 """Generation: the options -> one audited plan -> the product they ask for.
 
-Every product starts from the same plan-and-audit step (gen/plan.py) and one provenance record
-(gen/provenance.py); then a builder makes it: a LeRobot dataset (gen/dataset.py), a plan alone
-(`plan_only=true`, gen/plan_only.py) or an exam (`split=exam`, gen/exam.py).
+Every product starts from the same plan-and-audit step (gen/planning/plan.py) and one provenance record
+(gen/build/provenance.py); then a builder makes it: a LeRobot dataset (gen/build/dataset.py), a plan alone
+(`plan_only=true`, gen/build/plan_only.py) or an exam (`split=exam`, gen/build/exam.py).
 """
 
 from __future__ import annotations

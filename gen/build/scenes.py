@@ -6,7 +6,7 @@ Columns: episode_index (int), referent, instruction, target (an object id), scen
 spec_hash, scene_hash, failed_attempts (oracle attempts before the recorded one),
 initial_state (MuJoCo mjSTATE_INTEGRATION vector at frame 0) and outcome (JSON: every object's
 start and end position, the final end-effector position). A plan (`plan_only=true`) leaves the
-last three empty. A dataset mixing referent types (gen/mix.py) also names each episode's world
+last three empty. A dataset mixing referent types (gen/planning/mix.py) also names each episode's world
 (`world`, after `referent`): its types may be laid out in different worlds.
 """
 
@@ -27,6 +27,7 @@ from core.products import SCENES_PATH
 from core.spec import EpisodeSpec
 
 if TYPE_CHECKING:
+    from core.success import Outcome
     from gen.build.produce import Produced
 
 
@@ -46,8 +47,14 @@ def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None,
         "scene_hash": spec.scene_hash,
         "failed_attempts": len(produced.failures) if produced else None,
         "initial_state": produced.initial_state.astype(np.float64).tolist() if produced else None,
-        "outcome": json.dumps(asdict(produced.outcome)) if produced else None,
+        "outcome": json.dumps(_positions(produced.outcome)) if produced else None,
     }
+
+
+def _positions(outcome: Outcome) -> dict:
+    """The outcome's positions, as the record has always held them: a basket's end orientation
+    (`turns`), which the verdict also read, is left out."""
+    return {k: v for k, v in asdict(outcome).items() if k != "turns"}
 
 
 def write(root: Path, rows: list[dict]) -> None:

@@ -5,7 +5,7 @@ so the dataset is byte-identical whatever the number of workers or the backend. 
 back in episode order; the writer (in the calling process) only ever sees whole, verified
 episodes. A worker that dies mid-episode loses nothing that was written: its unfinished
 episodes are redone by a fresh pool, and the run stops with a clear error if crashes repeat.
-A mix of referent types (gen/mix.py) gives each worker one Producer per type, made when its
+A mix of referent types (gen/planning/mix.py) gives each worker one Producer per type, made when its
 first episode of that type comes.
 """
 
@@ -35,7 +35,7 @@ class WorkerCrash(RuntimeError):
 @dataclass(frozen=True)
 class Job:
     """What a worker needs to build its own Producers: how to load each referent type (those of a
-    mix take turns, gen/mix.py: its name, its spec overrides, the sim of its world)."""
+    mix take turns, gen/planning/mix.py: its name, its spec overrides, the sim of its world)."""
 
     referents: tuple[tuple[str, dict[str, Any], SimSettings], ...]
     spec_path: str | None

@@ -4,7 +4,7 @@ Writes what lerobot's own loader reads (lerobot 0.4.x, `codebase_version: "v3.0"
 
     meta/info.json  meta/stats.json  meta/tasks.parquet  meta/episodes/chunk-000/file-000.parquet
     data/chunk-XXX/file-YYY.parquet          many episodes per file, one row group each
-    videos/<key>/chunk-XXX/file-YYY.mp4      many episodes per file, remuxed (see gen/video.py)
+    videos/<key>/chunk-XXX/file-YYY.mp4      many episodes per file, remuxed (see gen/lerobot/video.py)
 
 Episodes arrive whole and already verified; the writer never sees a failed demo. Nothing here
 knows about scenes or referents: gen/ adds its own meta files beside these.

@@ -5,7 +5,7 @@ which objects, where, which is the target) are drawn in sequence by one balancer
 realised per episode from (seed, index, attempt), so re-realising a failed demo changes its
 poses but never its roles. `plan_and_audit` is the step every product (dataset, plan, exam)
 starts from: a plan whose confound audit finds a leak nobody asked for goes no further. A plan
-of several referent types (gen/mix.py) plans and audits each type on its own and interleaves them.
+of several referent types (gen/planning/mix.py) plans and audits each type on its own and interleaves them.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ PROGRESS_FROM = 10_000  # plans of this many episodes or more show a progress ba
 
 def designs(referent: Referent, n: int, seed: int, split: str = "train", stream: str | None = None) -> list[Design]:
     """The plan's roles. A spec whose values cannot fill a scene fails here, naming the file. A
-    mix's types each draw from a `stream` of their own (their label, gen/mix.py), so two types of
+    mix's types each draw from a `stream` of their own (their label, gen/planning/mix.py), so two types of
     alike scenes (negation and composition) never share one; a single type draws from the seed's."""
     from tqdm import tqdm
 
@@ -102,7 +102,7 @@ class Share:
 
 @dataclass
 class Planned:
-    """A product's plan: its referent types' shares (one, or a mix's taking turns, gen/mix.py),
+    """A product's plan: its referent types' shares (one, or a mix's taking turns, gen/planning/mix.py),
     and the roles and realised specs of every episode in episode order."""
 
     shares: tuple[Share, ...]

@@ -3,7 +3,7 @@ and ordinal on LIBERO-Object's floor, color on LIBERO-Spatial's table, each its 
 with the world's objects brought by a data file (referents/in_worlds/<world>/<type>.yaml), checked
 against LIBERO's own environment as the three LIBERO worlds are: the same pictures at generated
 states, recorded actions LIBERO's `check_success()` accepts, the audit, lerobot's loader, and each
-exam's reference policies. One small dataset mixing the five types (gen/mix.py) serves the
+exam's reference policies. One small dataset mixing the five types (gen/planning/mix.py) serves the
 replays and the pictures; the figures in docs/ come from the commands it lists (n=20 replays,
 n=100 first tries, 5 states of pictures per type)."""
 

@@ -1,5 +1,5 @@
 """The libero_spatial world against LIBERO's own environment (`.venv-libero`, driven by
-scripts/libero_reference.py), as tests/test_libero_world.py checks libero_object: the same
+scripts/libero_reference.py), as tests/libero/test_libero_world.py checks libero_object: the same
 physics model, the same pictures at LIBERO's own initial states, recorded actions that LIBERO's
 own `check_success()` accepts, and LIBERO-Spatial's initial states as an exam on which the
 shortcut LIBERO's layouts reward fetches the remembered bowl."""

@@ -20,7 +20,8 @@ from core import libero, worlds
 from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.products import ROLLOUTS
-from core.spec import FAST, LOOKS
+from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec, yaw_quat
+from core.success import Outcome, contained
 from eval.battery import take
 from eval.registry import make
 from eval.score import read_logs, swaps_obeyed
@@ -95,6 +96,53 @@ def test_the_same_pictures_and_poses_at_liberos_own_initial_states(look: str, tm
 def libero_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("libero_object") / "data"
     return make_dataset(root, f"referent={SUITE}", f"n={REPLAYS}", "image_size=64", "seed=1")
+
+
+@pytest.mark.reference
+def test_a_turned_basket_holds_what_liberos_in_says_it_holds(tmp_path: Path) -> None:
+    """LIBERO's `In` turns the basket's box with the basket (its `in_box`); ours, given the basket's
+    orientation (`Outcome.turns`), agrees at points in and around the box for baskets tilted and
+    turned as a dropped grocery leaves them, where the basket judged at rest (as ours judged before
+    it logged turns) does not."""
+    rng = np.random.default_rng(0)
+    rest = yaw_quat(0.0, worlds.world(SUITE).kind("basket").quat)
+    turns = [rest] + [_turned(rest, axis, angle) for axis, angle in (("x", 0.3), ("y", -0.25), ("z", 0.5), ("x", -0.15))]
+    cases = [
+        {"quat": list(q), "offset": list(rng.uniform([-0.1, -0.1, -0.02], [0.1, 0.1, 0.16]))} for q in turns for _ in range(60)
+    ]
+    request = {"task": 0, "state": 0, "container": "basket_1", "thing": "alphabet_soup_1", "cases": cases}
+    measured = json.loads(liberos_own("contain", request, tmp_path / "contain.json").read_text())
+    agree = at_rest = 0
+    for got in measured:
+        spec = _basket_spec(got["container"], got["thing"])
+        start = {o.id: o.pos for o in spec.objects}
+        end = {"basket": tuple(got["container"]), "soup": tuple(got["thing"])}
+        turned = Outcome(start, end, (0.0, 0.0, 1.2), {"basket": tuple(got["quat"])})
+        agree += contained(spec, turned, "soup") == got["libero_in"]
+        at_rest += contained(spec, dataclasses.replace(turned, turns={}), "soup") == got["libero_in"]
+    assert sum(g["libero_in"] for g in measured) > 40, "too few points inside LIBERO's box to tell"
+    assert agree == len(measured), f"{len(measured) - agree} of {len(measured)} points judged otherwise than LIBERO's In"
+    assert at_rest < len(measured), "the basket judged at rest already agrees: the cases test nothing"
+
+
+def _turned(rest: tuple[float, ...], axis: str, angle: float) -> tuple[float, ...]:
+    """`rest` turned by `angle` about the world's `axis`."""
+    half = np.zeros(3)
+    half["xyz".index(axis)] = np.sin(angle / 2)
+    w1, (x1, y1, z1) = np.cos(angle / 2), half
+    w2, x2, y2, z2 = rest
+    return (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)  # fmt: skip
+
+
+def _basket_spec(basket: list[float], soup: list[float]) -> EpisodeSpec:
+    objects = (
+        SceneObject("soup", "alphabet_soup", "alphabet soup", 0, tuple(soup)),
+        SceneObject("basket", "basket", "basket", 1, tuple(basket)),
+    )
+    sim = SimSettings(profile=LIBERO.name, cameras=LIBERO.camera_names, world=SUITE)
+    task = TaskSpec(program="pick_place", params={"destination": "basket"})
+    return EpisodeSpec(SUITE, 0, 0, objects, "soup", "", "", (), (), task, sim)
 
 
 @pytest.mark.reference

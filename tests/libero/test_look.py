@@ -1,7 +1,7 @@
 """The full look (core/spec.py LOOKS): `look=full` draws every mesh whole and MuJoCo's reflections,
 as LIBERO's own simulator does. A dataset made so is drawn so (its physics untouched), says so in
 every record that rebuilds it, and what replays its episodes draws them the same way. How close
-each look comes to LIBERO's own frames is the picture tests' (tests/test_libero_*.py)."""
+each look comes to LIBERO's own frames is the picture tests' (tests/libero/test_libero_*.py)."""
 
 from __future__ import annotations
 

@@ -43,6 +43,24 @@ def test_the_confounded_arm_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     spent = json.loads((out / "timings.json").read_text())
     again = _release("arms=[confounded]", f"out={out}", f"docs={docs}")
     assert again.returncode == 0 and json.loads((out / "timings.json").read_text()) == spent  # nothing redone
+    assert "workers" not in text.split("from the")[0] and "steps_per_axis=1" in text  # what ran, not how
+    other = _release("arms=[confounded]", "lr_floor=0.5", "train=false", f"out={out}", f"docs={docs}")
+    assert other.returncode == 2 and "begun with lr_floor=0.05, not 0.5" in other.stderr, other.stderr
+    assert (docs / "RESULTS_LIBERO_AXES.md").read_text() == text
+
+
+@pytest.mark.parametrize("train", ["true", "false"])
+def test_a_folder_the_release_did_not_begin_is_refused(train: str, tmp_path: Path) -> None:
+    """out= naming a folder that holds something else is never written into, nor read as results."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    done = _release(f"train={train}", f"out={out}", f"docs={tmp_path / 'd'}")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "not a release run's folder" in lines[0], done.stderr
+    assert [p.name for p in out.iterdir()] == ["notes.txt"] and not (tmp_path / "d").exists()
+    empty = _release("train=false", f"out={tmp_path / 'none'}", f"docs={tmp_path / 'd'}")
+    assert empty.returncode == 2 and "holds no release run yet" in empty.stderr and not (tmp_path / "none").exists()
 
 
 @pytest.mark.parametrize(

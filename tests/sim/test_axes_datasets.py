@@ -1,7 +1,7 @@
 """`python -m gen referent=<type> n=24` for each of the nine types of the native world writes a
 dataset that lerobot loads, lerobot-doctor passes, whose every episode replays to success, and
 whose written episodes pass the same confound audit as the plan (LIBERO's world:
-tests/test_libero_world.py)."""
+tests/libero/test_libero_world.py)."""
 
 from __future__ import annotations
 

@@ -22,12 +22,12 @@ kernel (the same EPYC without that variable, and the hosts the hashes were first
 while two runs on one host agree. So the plans are pinned everywhere, the physics per numeric
 family (`numeric_family()`: BLAS kernel and numpy's widest vector extension) where the family's
 hashes were recorded, and on a family with none only same-seed determinism is checked
-(tests/test_dataset.py, and twice here). Rendered pixels depend on the processor too (Mesa's
+(tests/sim/test_dataset.py, and twice here). Rendered pixels depend on the processor too (Mesa's
 llvmpipe compiles its rasteriser for the host's vector instructions) besides the physics behind
 them: the videos and the per-episode image statistics in meta/episodes are pinned per processor
 and numeric family the same way.
 
-The videos changed once, on purpose: H.264 moved from crf to a constant quantiser (gen/video.py),
+The videos changed once, on purpose: H.264 moved from crf to a constant quantiser (gen/lerobot/video.py),
 because x264's floating-point rate control gave different bytes for the same frames in one CI
 run. Only the AMD family's videos could be re-recorded (no Intel host was at hand); the Intel
 family keeps its per-episode records, and its videos are checked again once recorded there.

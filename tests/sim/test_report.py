@@ -168,6 +168,8 @@ def test_the_scorer_refuses_duplicated_rows_and_a_wrong_step_zero(exam: Exam, tm
         (lambda logs: [{**log, "row": str(log["row"])} for log in logs], "column 'row' must hold integers"),
         (lambda logs: [{**log, "ee": "left"} for log in logs], "column 'ee' must hold each rollout's end-effector positions"),
         (lambda logs: [{**log, "objects": 7} for log in logs], "column 'objects' must hold a JSON string"),
+        (lambda logs: [{**log, "turns": 7} for log in logs], "column 'turns' must hold a JSON string"),
+        (lambda logs: [{**log, "turns": json.dumps({"basket": [[1, 0, 0, 0]] * 99})} for log in logs], "one orientation per"),
     ],
 )
 def test_the_scorer_names_a_stray_row_or_a_column_of_the_wrong_type(exam: Exam, tmp_path: Path, change, needle: str) -> None:  # noqa: ANN001

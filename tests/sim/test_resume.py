@@ -1,6 +1,6 @@
 """Crash-safe, resumable, reproducible generation, and the integrity check.
 
-A run is SIGKILLed at several points (fault injection, gen/faults.py); resuming it must give the
+A run is SIGKILLed at several points (fault injection, jobs/faults.py); resuming it must give the
 same bytes as a run that was never interrupted, with no episode lost or duplicated."""
 
 from __future__ import annotations

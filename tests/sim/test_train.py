@@ -21,13 +21,14 @@ from core.layout import NATIVE
 from eval.battery import take
 from eval.policies import FeatureMismatch
 from eval.registry import make
+from gen.config import parse
 from gen.lerobot.stats import image_histogram
 from gen.lerobot.video import encode_episode
 from gen.lerobot.writer import Episode, LeRobotWriter, Recording
 from helpers import ONE_TRIAL_64, Shared, make_dataset
-from jobs.cli import main
+from jobs.cli import UserError, main
 from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
-from train.stages import TIMINGS, Ledger
+from train.stages import TIMINGS, Ledger, made
 
 
 @pytest.fixture(scope="module")
@@ -235,3 +236,18 @@ def test_two_experiment_processes_add_to_one_ledger(tmp_path: Path) -> None:
     first.spend("train a", start)
     spent = json.loads((tmp_path / TIMINGS).read_text())
     assert set(spent) == {"train a", "train b"} and spent["train a"] >= 2.0 > spent["train b"] >= 1.0
+
+
+def test_an_experiment_reuses_a_product_only_if_its_options_made_it(object_dataset: Path, shared: Shared) -> None:
+    """A dataset or exam already in a stage's folder is reused only when made with the stage's
+    options (not merely because something finished is there); another is refused, naming it."""
+    exam = shared.dataset("exam", *ONE_TRIAL_64)
+    dataset_options = ("referent=object", "n=4", "image_size=64", "overwrite=true", "resume=true")
+    assert made(parse([f"out={object_dataset}", *dataset_options, "seed=7"]), object_dataset)
+    assert made(parse([f"out={exam}", *ONE_TRIAL_64, "overwrite=true", "resume=true"]), exam)
+    nothing = object_dataset.parent / "nothing"
+    assert not made(parse([f"out={nothing}", *dataset_options]), nothing)
+    with pytest.raises(UserError, match="another seed"):
+        made(parse([f"out={object_dataset}", *dataset_options, "seed=8"]), object_dataset)
+    with pytest.raises(UserError, match="holds the exam .*seed=0.*, not .*seed=2"):
+        made(parse([f"out={exam}", *ONE_TRIAL_64, "seed=2", "overwrite=true", "resume=true"]), exam)
