@@ -39,9 +39,9 @@ import oracle  # noqa: F401  (headless-rendering defaults)
 from core import parquet, worlds
 from core.layout import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
-from gen.build import scenes
-from gen.build.run import generate
 from gen.config import parse
+from gen.products import scenes
+from gen.products.run import generate
 from jobs.cli import UserError, main
 from referents import registry
 

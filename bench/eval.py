@@ -22,8 +22,8 @@ from core.exam import read
 from eval.battery import take
 from eval.policies import PolicyError
 from eval.registry import make
-from gen.build.run import generate
 from gen.config import parse
+from gen.products.run import generate
 from jobs.cli import UserError, main
 
 

@@ -36,8 +36,8 @@ _producers: dict = {}
 
 def _first_try(cfg: GenConfig, index: int) -> tuple[int, bool, str, int]:
     """(episode, success, why not, control steps) of the first realisation of episode `index`."""
-    from gen.build.produce import Producer
     from gen.planning.plan import realize
+    from gen.products.produce import Producer
     from oracle.episode import demonstrate
 
     if "planned" not in _producers:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List
 
-import gen.build.produce as produce
+import gen.products.produce as produce
 from core import worlds
 from gen.config import GenConfig, load_referent, validate
 from gen.lerobot.writer import LeRobotWriter, Recording

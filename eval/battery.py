@@ -46,7 +46,7 @@ REPORT_FILES = (*REPORTS, ROLLOUTS)  # what a take writes to `out`, all it ever 
 
 
 def _worker(parent: int) -> None:
-    """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/build/workers.py)."""
+    """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/products/workers.py)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with(parent)
 

@@ -27,7 +27,7 @@ from core.exam import read
 from core.spec import FAST
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
-from gen.build.canonical import CanonicalOptions, build, suite_of
+from gen.products.canonical import CanonicalOptions, build, suite_of
 from jobs.cli import UserError, main
 
 FACES = ("task", "obeyed_name", "true_target", "occ", "nonsense")

@@ -13,7 +13,7 @@ from jobs.cli import Failed, main
 
 def generate(cfg: GenConfig) -> None:
     validate(cfg)
-    from gen.build.run import generate  # the simulator stack loads only for valid input
+    from gen.products.run import generate  # the simulator stack loads only for valid input
 
     try:
         summary = generate(cfg)

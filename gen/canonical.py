@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import sys
 
-from gen.build.canonical import CanonicalOptions, build
+from gen.products.canonical import CanonicalOptions, build
 from jobs.cli import main
 
 if __name__ == "__main__":

@@ -21,9 +21,9 @@ import numpy as np
 
 from core.layout import ACTION_KEY, STATE_KEY
 from core.products import INFO_PATH
-from gen.build import scenes
 from gen.lerobot.reader import LeRobotReader
 from gen.lerobot.stats import vector_stats
+from gen.products import scenes
 from jobs.cli import Failed, UserError, main
 from jobs.output import product_in
 

@@ -146,7 +146,7 @@ def validate(cfg: GenConfig) -> None:
         name = cfg.referent if cfg.world == registry.world_of(cfg.referent, cfg.spec) else f"{cfg.referent}-{cfg.world}"
         cfg.out = str(Path("datasets") / (name if cfg.split == "train" else f"{name}-exam"))
     try:
-        if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/build/run.py)
+        if finished(cfg) is None:  # resume=true on a finished run replaces nothing (gen/products/run.py)
             check_output(Path(cfg.out), cfg.overwrite)
     except (OSError, ValueError) as exc:  # e.g. a NUL byte or an over-long name in the path
         raise UserError(f"out={cfg.out!r} is not a usable path ({exc})") from None

@@ -16,7 +16,7 @@ from typing import Optional
 import cv2
 
 from core.products import PREVIEW_PATH, SCENES_PATH
-from gen.build.sheet import contact_sheet
+from gen.products.sheet import contact_sheet
 from jobs.cli import UserError, main
 
 

@@ -18,8 +18,8 @@ import numpy as np
 
 from core.layout import ACTION_KEY, STATE_KEY
 from core.spec import EpisodeSpec
-from gen.build import scenes
 from gen.lerobot.reader import LeRobotReader
+from gen.products import scenes
 from jobs.cli import Failed, UserError, main
 
 FRAME_TOLERANCE = 3.0  # mean |difference| per frame, in 0..255 units
@@ -31,7 +31,7 @@ class Mismatch(Exception):
 
 def verify(root: Path, sample: int = 3) -> list[int]:
     """Raises Mismatch on the first difference; returns the episodes checked."""
-    from gen.build.produce import Producer
+    from gen.products.produce import Producer
     from oracle.episode import demonstrate
     from referents import registry
 

@@ -32,7 +32,7 @@ def picture(options: FirstFramesOptions) -> None:
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
     from PIL import Image, ImageDraw
 
-    from gen.build import scenes
+    from gen.products import scenes
     from jobs.partial import completed
 
     root = Path(options.dataset)

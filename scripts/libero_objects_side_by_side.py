@@ -86,7 +86,7 @@ def _load(scene, referent, world, task: str, state: int, sim) -> None:  # noqa: 
     referent and a world (revisions before LIBERO-PRO's suites)."""
     import inspect
 
-    from gen.build import canonical
+    from gen.products import canonical
 
     if "suite" in inspect.signature(canonical.load_state).parameters:
         suite = canonical.suite_of(canonical.CanonicalOptions(world=world.name))

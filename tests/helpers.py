@@ -20,10 +20,10 @@ from core.exam import FACES, Exam, read
 from core.layout import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World
-from gen.build.canonical import CanonicalOptions, Suite, load_state, suite_of
-from gen.build.run import generate
 from gen.config import parse
 from gen.planning.plan import world_sim
+from gen.products.canonical import CanonicalOptions, Suite, load_state, suite_of
+from gen.products.run import generate
 from jobs.lock import held
 from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
@@ -199,7 +199,7 @@ class Shared:
     def canonical(self, world: str = "libero_object") -> Path:
         """`world`'s canonical exam (gen.canonical) on the first of LIBERO's initial states of each task, at
         32 px, without switch rows (the switch face has its own tests)."""
-        from gen.build.canonical import CanonicalOptions, build
+        from gen.products.canonical import CanonicalOptions, build
 
         def made(folder: Path) -> None:
             build(CanonicalOptions(world=world, states=1, image_size=32, out=str(folder / "canonical"), switches=0))
@@ -243,8 +243,8 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     with fixtures replays in its suite's own scene, the fixtures where the records stand them. A
     dataset mixing worlds (gen/planning/mix.py) gives the episodes of `world`."""
     from core.layout import ACTION_KEY
-    from gen.build import scenes
     from gen.lerobot.reader import LeRobotReader
+    from gen.products import scenes
 
     reader, sites = LeRobotReader(dataset), {k.name: k.anchor for k in world.kinds.values() if k.is_site}
     records = scenes.read(dataset)

@@ -178,7 +178,7 @@ def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) 
     """A LIBERO world's canonical exam (gen.canonical), made once; None natively."""
     if not worlds.world(options.world).suite:
         return None
-    from gen.build.canonical import CanonicalOptions, build
+    from gen.products.canonical import CanonicalOptions, build
 
     out = _out(options) / CANONICAL
     chosen = CanonicalOptions(options.world, options.states, options.seed + 1, options.image_size, str(out))

@@ -172,7 +172,7 @@ def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
 
 def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """LIBERO's canonical exams (gen.canonical), made once."""
-    from gen.build.canonical import CanonicalOptions, build
+    from gen.products.canonical import CanonicalOptions, build
 
     made = {}
     for world in CANONICAL:

@@ -61,7 +61,7 @@ class Ledger:
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
     """Generate `cfg`'s dataset or exam unless its folder already holds it (two experiment
     processes on one `out` that both need it: one makes it while the other waits)."""
-    from gen.build.run import generate
+    from gen.products.run import generate
 
     out = Path(str(cfg.out))
     with held(out.parent / f".{out.name}.lock"):
@@ -75,8 +75,8 @@ def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
 def made(cfg: GenConfig, out: Path) -> bool:
     """Whether `out` holds the finished product `cfg` describes; one made with other options is
     refused (one line naming both), never silently reused."""
-    from gen.build.dataset import already_complete
-    from gen.build.provenance import Provenance
+    from gen.products.dataset import already_complete
+    from gen.products.provenance import Provenance
     from jobs.partial import completed
 
     if (out / "exam.json").is_file():

@@ -119,7 +119,7 @@ def test_eval_and_score_refuse_to_write_a_report_into_a_product(tmp_path: Path, 
 
 WITH_OUT = (
     "gen.config:GenConfig",
-    "gen.build.canonical:CanonicalOptions",
+    "gen.products.canonical:CanonicalOptions",
     "gen.export:ExportOptions",
     "gen.preview:PreviewOptions",
     "eval.__main__:EvalOptions",
@@ -169,7 +169,7 @@ def test_an_empty_out_is_one_line_and_exit_2_before_any_work(tmp_path: Path, cap
 
 
 def test_the_take_hint_quotes_an_exam_path_with_spaces() -> None:
-    from gen.build.exam import ExamSummary
+    from gen.products.exam import ExamSummary
 
     out = Path("/tmp/my exams/object exam")
     hint = str(ExamSummary(out, 3, 1.0, "ok")).splitlines()[-1]
@@ -238,8 +238,8 @@ def _faces_tables() -> dict[str, dict[str, str]]:
 
 def test_results_faces_commands_make_exactly_the_rows_of_its_tables() -> None:
     from eval.__main__ import EvalOptions
-    from gen.build.canonical import CanonicalOptions
     from gen.config import GenConfig
+    from gen.products.canonical import CanonicalOptions
 
     commands, tables = _faces_commands(), _faces_tables()
     exams: dict[str, tuple[str, object]] = {}  # out -> (world, options)

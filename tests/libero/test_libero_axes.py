@@ -26,9 +26,9 @@ from core.layout import LIBERO
 from core.spec import EpisodeSpec
 from eval.battery import take
 from eval.registry import make
-from gen.build import scenes
 from gen.planning.audit import audit
 from gen.planning.plan import default_sim, plan
+from gen.products import scenes
 from helpers import PICTURE_STATES, Pictures, liberos_own, liberos_replay, make_dataset, rows_of
 from oracle.render import Cameras
 from oracle.scene import scene_for

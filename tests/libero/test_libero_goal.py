@@ -21,9 +21,9 @@ from core.spec import FAST, LOOKS, EpisodeSpec
 from core.success import Outcome, succeeded
 from eval.battery import take
 from eval.registry import make
-from gen.build import scenes
-from gen.build.canonical import covered
 from gen.planning.plan import default_sim, plan
+from gen.products import scenes
+from gen.products.canonical import covered
 from helpers import (
     PICTURE_STATES,
     REPLAYS,

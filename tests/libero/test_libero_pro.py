@@ -19,8 +19,8 @@ from core.exam import read
 from core.spec import FAST, FULL
 from eval.battery import take
 from eval.registry import make
-from gen.build.canonical import CanonicalOptions, build, suite_of, trial_spec
 from gen.planning.plan import world_sim
+from gen.products.canonical import CanonicalOptions, build, suite_of, trial_spec
 from helpers import initial_state_pictures, rows_of
 from jobs.cli import UserError
 

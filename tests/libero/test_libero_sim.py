@@ -102,7 +102,7 @@ def _agree(exam_root: Path, tmp_path: Path, through_switch: bool = False) -> tup
 
 @pytest.fixture(scope="module")
 def canonical(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from gen.build.canonical import CanonicalOptions, build
+    from gen.products.canonical import CanonicalOptions, build
 
     out = tmp_path_factory.mktemp("canonical") / "canonical"
     build(CanonicalOptions(world="libero_object", states=1, tasks=2, image_size=32, out=str(out)))
@@ -132,7 +132,7 @@ def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, 
 @pytest.mark.reference
 def test_a_libero_pro_lan_suite_hands_the_policy_the_bddl_language_line(tmp_path: Path) -> None:
     from core import libero
-    from gen.build.canonical import CanonicalOptions, build
+    from gen.products.canonical import CanonicalOptions, build
 
     out = tmp_path / "lan"
     build(CanonicalOptions(suite="libero_object_lan", states=1, tasks=2, image_size=32, out=str(out)))

@@ -20,8 +20,8 @@ from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS
 from eval.battery import take
 from eval.registry import make
-from gen.build import scenes
-from gen.build.canonical import CanonicalOptions, build
+from gen.products import scenes
+from gen.products.canonical import CanonicalOptions, build
 from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,

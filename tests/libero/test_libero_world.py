@@ -25,8 +25,8 @@ from core.success import Outcome, contained
 from eval.battery import take
 from eval.registry import make
 from eval.score import read_logs, swaps_obeyed
-from gen.build import scenes
-from gen.build.canonical import CanonicalOptions, build
+from gen.products import scenes
+from gen.products.canonical import CanonicalOptions, build
 from helpers import (
     CANONICAL_STATES,
     PICTURE_STATES,

@@ -16,9 +16,9 @@ from core.exam import read
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, FULL, EpisodeSpec
 from eval.env import ExamEnv
-from gen.build import scenes
-from gen.build.canonical import CanonicalOptions, build
 from gen.config import parse
+from gen.products import scenes
+from gen.products.canonical import CanonicalOptions, build
 from helpers import make_dataset
 from jobs.cli import UserError
 from oracle.scene import spec_scene

@@ -17,7 +17,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 from core import parquet
 from core.spec import EpisodeSpec
 from core.success import Outcome, succeeded
-from gen.build import scenes
+from gen.products import scenes
 from helpers import make_dataset
 from oracle.scene import scene_for
 from referents import registry

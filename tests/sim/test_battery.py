@@ -21,8 +21,8 @@ from eval.battery import take
 from eval.policies import Context, PolicyError
 from eval.registry import make, names, register
 from eval.rollout import Runner
-from gen.build import scenes
 from gen.planning.plan import plan
+from gen.products import scenes
 from helpers import make_dataset, rows_of
 from referents import registry
 
@@ -233,7 +233,7 @@ def test_a_verb_exams_horizon_does_not_tell_the_program(tmp_path: Path) -> None:
     the oracle's demonstration of any row's ask fits in it with the usual margin (a switch row's
     horizon counts from its switch, and the switch row says it is one)."""
     from core.spec import EpisodeSpec
-    from gen.build.exam import HORIZON_FACTOR, HORIZON_SLACK
+    from gen.products.exam import HORIZON_FACTOR, HORIZON_SLACK
     from oracle.episode import demonstrate
     from oracle.ik import ArmIK
     from oracle.scene import scene_for

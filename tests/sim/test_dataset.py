@@ -13,7 +13,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core import parquet
 from core.spec import EpisodeSpec
-from gen.build import scenes
+from gen.products import scenes
 from helpers import make_dataset
 
 
@@ -109,7 +109,7 @@ def test_same_seed_same_bytes(tmp_path: Path) -> None:
 def test_contact_sheet(object_dataset: Path, tmp_path: Path) -> None:
     import cv2
 
-    from gen.build.sheet import contact_sheet
+    from gen.products.sheet import contact_sheet
 
     sheet = cv2.imread(str(contact_sheet(object_dataset, tmp_path / "sheet.png", n=4)))
     assert sheet.shape == (256 + 54, 4 * 256, 3)

@@ -21,9 +21,9 @@ from eval.battery import take
 from eval.env import ExamEnv
 from eval.registry import make
 from eval.rollout import ProfileMismatch, Runner
-from gen.build import scenes
 from gen.lerobot.reader import LeRobotReader
 from gen.planning.plan import plan
+from gen.products import scenes
 from helpers import ONE_TRIAL, Shared, body_image, make_dataset, rows_of
 from oracle.episode import replay
 from oracle.render import Cameras

@@ -17,9 +17,9 @@ from PIL import Image
 
 from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import EpisodeSpec
-from gen.build import scenes
 from gen.config import GenConfig, parse
 from gen.planning.plan import designs, plan_and_audit
+from gen.products import scenes
 from helpers import make_dataset
 from jobs.cli import main
 

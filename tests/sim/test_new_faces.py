@@ -94,7 +94,7 @@ def test_a_switch_the_oracle_cannot_finish_is_left_out_saying_why(exam: Path) ->
     achieve it, switched or not, so the builder keeps no such row and says so."""
     import numpy as np
 
-    from gen.build.exam import switch_rows
+    from gen.products.exam import switch_rows
     from oracle.ik import ArmIK
     from oracle.scene import Scene
     from referents import registry

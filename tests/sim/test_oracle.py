@@ -13,9 +13,9 @@ import pytest
 from core import parquet
 from core.spec import EpisodeSpec, SimSettings
 from core.success import lifted, succeeded
-from gen.build import scenes
-from gen.build.produce import Producer
 from gen.planning.plan import designs, plan, realize
+from gen.products import scenes
+from gen.products.produce import Producer
 from oracle.episode import demonstrate, replay
 from oracle.ik import DOWN, ArmIK, yaw_matrix
 from oracle.scene import EE_SITE, Scene, scene_for

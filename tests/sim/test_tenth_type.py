@@ -15,8 +15,8 @@ import yaml
 
 from core import parquet
 from core.spec import SimSettings
-from gen.build import scenes
 from gen.planning.plan import designs, plan
+from gen.products import scenes
 from helpers import make_dataset
 from referents import registry
 from referents.schema import ReferentSpecError

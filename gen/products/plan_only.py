@@ -7,10 +7,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from gen.build import card, scenes
-from gen.build.dataset import audits, verdict, write_audit, write_generation
-from gen.build.provenance import Provenance
 from gen.planning.plan import Planned
+from gen.products import card, scenes
+from gen.products.dataset import audits, verdict, write_audit, write_generation
+from gen.products.provenance import Provenance
 from jobs.partial import staging
 
 

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from core.spec import SimSettings
-from gen.build.produce import Produced, Producer
 from gen.planning import mix
+from gen.products.produce import Produced, Producer
 from jobs import faults
 from jobs.processes import die_with
 from referents.design import Design

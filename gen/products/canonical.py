@@ -40,9 +40,9 @@ import numpy as np
 from core import exam, libero, worlds
 from core.layout import STATE_KEY, TASK_KEY, layout
 from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings, yaw_of
-from gen.build.exam import take_hint
 from gen.config import check_seed
 from gen.planning.audit import audit
+from gen.products.exam import take_hint
 from jobs.cli import UserError
 from jobs.output import check_output
 from jobs.partial import staging
@@ -308,7 +308,7 @@ def build(options: CanonicalOptions) -> None:
     suite, out = _options(options)
     from tqdm import tqdm
 
-    from gen.build.exam import first_frame, switch_rows
+    from gen.products.exam import first_frame, switch_rows
     from oracle.ik import ArmIK
     from oracle.render import Cameras
     from oracle.scene import scene_for

@@ -20,17 +20,17 @@ import numpy as np
 
 from core import exam
 from core.layout import NATIVE, STATE_KEY, TASK_KEY
-from gen.build import card
-from gen.build.provenance import Provenance
 from gen.config import GenConfig
 from gen.planning.plan import Planned
+from gen.products import card
+from gen.products.provenance import Provenance
 from jobs.cli import UserError
 from jobs.partial import staging
 from referents.registry import Referent
 
 if TYPE_CHECKING:
     from core.spec import EpisodeSpec
-    from gen.build.produce import Producer
+    from gen.products.produce import Producer
     from oracle.episode import Demo
     from oracle.ik import ArmIK
     from oracle.render import Cameras
@@ -74,7 +74,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> tuple[list[dict
     without the switch rows asked for lacks them."""
     from tqdm import tqdm
 
-    from gen.build.produce import DemoFailed, Producer
+    from gen.products.produce import DemoFailed, Producer
 
     referent = planned.only.referent
     producer = Producer(referent, planned.only.sim)

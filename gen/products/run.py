@@ -1,8 +1,8 @@
 """Generation: the options -> one audited plan -> the product they ask for.
 
 Every product starts from the same plan-and-audit step (gen/planning/plan.py) and one provenance record
-(gen/build/provenance.py); then a builder makes it: a LeRobot dataset (gen/build/dataset.py), a plan alone
-(`plan_only=true`, gen/build/plan_only.py) or an exam (`split=exam`, gen/build/exam.py).
+(gen/products/provenance.py); then a builder makes it: a LeRobot dataset (gen/products/dataset.py), a plan alone
+(`plan_only=true`, gen/products/plan_only.py) or an exam (`split=exam`, gen/products/exam.py).
 """
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from gen.build import dataset, exam, plan_only
-from gen.build.provenance import Provenance
 from gen.config import GenConfig, finished
 from gen.planning.plan import plan_and_audit
+from gen.products import dataset, exam, plan_only
+from gen.products.provenance import Provenance
 
 Summary = dataset.DatasetSummary | dataset.AlreadyComplete | plan_only.PlanSummary | exam.ExamSummary
 

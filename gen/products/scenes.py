@@ -28,7 +28,7 @@ from core.spec import EpisodeSpec
 
 if TYPE_CHECKING:
     from core.success import Outcome
-    from gen.build.produce import Produced
+    from gen.products.produce import Produced
 
 
 def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None, mixed: bool = False) -> dict:

@@ -15,13 +15,13 @@ from pathlib import Path
 
 from core.products import AUDIT_PATH, GENERATION_PATH, PREVIEW_PATH
 from core.spec import EpisodeSpec
-from gen.build import card, scenes
-from gen.build.provenance import Provenance, run_record
-from gen.build.sheet import contact_sheet
 from gen.config import GenConfig
 from gen.planning import mix
 from gen.planning.audit import agree, audit
 from gen.planning.plan import Planned
+from gen.products import card, scenes
+from gen.products.provenance import Provenance, run_record
+from gen.products.sheet import contact_sheet
 from jobs import faults
 from jobs.cli import UserError
 from jobs.partial import Partial
@@ -131,8 +131,8 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
     """Produce every episode not yet in the partial run; returns the failed oracle attempts."""
     from tqdm import tqdm
 
-    from gen.build.produce import DemoFailed
-    from gen.build.workers import Job, WorkerCrash, produce
+    from gen.products.produce import DemoFailed
+    from gen.products.workers import Job, WorkerCrash, produce
 
     shares = zip(cfg.shares(), planned.shares, strict=True)
     types = tuple((one.referent, one.spec_overrides(), share.sim) for one, share in shares)

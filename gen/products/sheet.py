@@ -12,8 +12,8 @@ import numpy as np
 
 from core.products import INFO_PATH
 from core.spec import EpisodeSpec
-from gen.build import scenes
 from gen.lerobot.reader import LeRobotReader
+from gen.products import scenes
 
 TILE = 256
 CAPTION = 54

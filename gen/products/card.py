@@ -8,7 +8,7 @@ from pathlib import Path
 
 from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
 from core.products import CARD_PATH, PREVIEW_PATH
-from gen.build.provenance import Provenance
+from gen.products.provenance import Provenance
 from referents.registry import Referent
 from referents.schema import ReferentConfig
 
