@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -187,9 +186,8 @@ def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) 
         f"image_size={chosen.image_size} out={out}"
     )
     if not (out / "exam.json").is_file():
-        start = time.perf_counter()
-        build(chosen)
-        ledger.spend("generate canonical", start)
+        with ledger.timing("generate canonical"):
+            build(chosen)
     return out
 
 
@@ -260,12 +258,11 @@ def run(options: ExperimentOptions) -> dict:
             if not options.train:
                 not_run.append(run_name)
                 continue
-            t = time.perf_counter()
             try:  # a killed run, or a finished shorter one, continues from its last matching state
-                fit(cfg)
+                with ledger.timing(f"train {run_name}"):
+                    fit(cfg)
             except ValueError as exc:  # the dataset or an earlier run's checkpoint does not fit
                 raise Failed(f"training {ckpt}: {exc}") from None
-            ledger.spend(f"train {run_name}", t)
             log = train_log(ckpt)
         curve = []
         for step in [*kept_steps(ckpt, options.steps), options.steps]:

@@ -33,7 +33,6 @@ from __future__ import annotations
 import json
 import shlex
 import sys
-import time
 from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -181,9 +180,8 @@ def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> d
         commands.append(f"python -m gen.canonical world={world} states={chosen.states} seed={chosen.seed} "
                         f"image_size={chosen.image_size} out={out}")  # fmt: skip
         if not (out / "exam.json").is_file():
-            start = time.perf_counter()
-            build(chosen)
-            ledger.spend(f"generate canonical {world}", start)
+            with ledger.timing(f"generate canonical {world}"):
+                build(chosen)
         made[world] = (read(str(out)), out)
     return made
 
@@ -223,10 +221,6 @@ def run(options: ReleaseOptions) -> None:
     """Every stage the chosen arms need, in the order that gives results soonest: data, exams,
     then per arm its training and its takes in our rebuild, then LIBERO's simulator's takes."""
     stages = _stages(options)
-    # Only for valid input, and before generation makes a GL context in this process: triton, which
-    # torch's compiler loads (transformers imports it with the text tower), crashes (SIGSEGV) after one.
-    import torch._dynamo  # noqa: F401
-
     from train.policy import MODEL_FILE
 
     root = Path(options.out)

@@ -17,7 +17,8 @@ import hashlib
 import json
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -47,6 +48,16 @@ class Ledger:
     def _read(self) -> dict[str, float]:
         return json.loads(self.path.read_text()) if self.path.is_file() else {}
 
+    @contextmanager
+    def timing(self, stage: str) -> Iterator[None]:
+        """Time the work inside as `stage`'s, added when it ends: also when stopped by Ctrl-C or an
+        error (a stage stopped part way did that much of its work, which its rerun does not redo)."""
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.spend(stage, start)
+
     def spend(self, stage: str, start: float) -> None:
         """Add the work `stage` did since `start` (a `time.perf_counter()` reading) to the file as it is now."""
         seconds = time.perf_counter() - start
@@ -61,15 +72,18 @@ class Ledger:
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
     """Generate `cfg`'s dataset or exam unless its folder already holds it (two experiment
     processes on one `out` that both need it: one makes it while the other waits)."""
+    # Before generation makes a GL context in this process (workers=1): triton, which torch's
+    # compiler loads (transformers imports it with the text tower), crashes (SIGSEGV) after one.
+    import torch._dynamo  # noqa: F401
+
     from gen.products.run import generate
 
     out = Path(str(cfg.out))
     with held(out.parent / f".{out.name}.lock"):
         if made(cfg, out):
             return
-        start = time.perf_counter()
-        generate(cfg)
-        ledger.spend(stage, start)
+        with ledger.timing(stage):
+            generate(cfg)
 
 
 def made(cfg: GenConfig, out: Path) -> bool:
@@ -103,12 +117,11 @@ def train_once(cfg: TrainConfig, ledger: Ledger, stage: str, allowed: bool = Tru
     if log is None or recipe(log["config"]) != recipe(asdict(cfg)):
         if not allowed:
             return None
-        start = time.perf_counter()
         try:
-            fit(cfg)
+            with ledger.timing(stage):
+                fit(cfg)
         except ValueError as exc:
             raise Failed(f"training {ckpt}: {exc}") from None
-        ledger.spend(stage, start)
         log = train_log(ckpt)
     return log
 
@@ -179,10 +192,9 @@ def _once(out: Path, digest: str, run: Callable[[], None], ledger: Ledger, stage
     stamp = out / WEIGHTS_DIGEST
     with held(out.parent / f".{out.name}.lock"):
         if not (out / "report.json").is_file() or not stamp.is_file() or stamp.read_text() != digest:
-            start = time.perf_counter()
-            run()
+            with ledger.timing(stage):
+                run()
             stamp.write_text(digest)
-            ledger.spend(stage, start)
     return json.loads((out / "report.json").read_text())
 
 

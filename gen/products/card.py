@@ -18,7 +18,7 @@ task_categories:
 - robotics
 tags:
 - LeRobot
-- deconfounded
+- {kind}
 - referent-{referent}
 configs:
 - config_name: default
@@ -113,12 +113,19 @@ def _templates(rc: ReferentConfig) -> str:
     return "\n".join(f"- `{t}`" for t in rc.templates)
 
 
+def _kind(referents: Sequence[Referent]) -> str:
+    """What the card calls the data: `confounded` where a type was laid out with a shortcut on
+    purpose (`confound=`, the twin a deconfounded set is compared with), else `deconfounded`."""
+    return "confounded" if any(r.config.confound for r in referents) else "deconfounded"
+
+
 def _one(referent: Referent, report: dict, provenance: Provenance, contents: str, sheet: str) -> str:
     rc = referent.config
+    kind = _kind([referent])
     return (
-        FRONT_MATTER.format(referent=referent.name)
+        FRONT_MATTER.format(referent=referent.name, kind=kind)
         + f"""
-# Deconfounded `{referent.name}` dataset
+# {kind.capitalize()} `{referent.name}` dataset
 
 {contents}
 {sheet}
@@ -189,16 +196,18 @@ distractor across slots, with {referent.config.objects_per_scene} objects per sc
         f"{'' if referent.label == referent.name else '-' + referent.config.world}-exam"
         for referent, _ in audited
     )
+    kind = _kind([referent for referent, _ in audited])
+    made = "deconfounded" if kind == "deconfounded" else "laid out as its `confound` says"
     return (
-        FRONT_MATTER.format(referent="\n- referent-".join(dict.fromkeys(referent.name for referent, _ in audited)))
+        FRONT_MATTER.format(referent="\n- referent-".join(dict.fromkeys(referent.name for referent, _ in audited)), kind=kind)
         + f"""
-# Deconfounded dataset of {len(names)} referent types: {", ".join(f"`{name}`" for name in names)}
+# {kind.capitalize()} dataset of {len(names)} referent types: {", ".join(f"`{name}`" for name in names)}
 
 {contents}
 {sheet}
 {provenance.config.n // len(names)} episodes of each type, taking turns in this order (episode i is of
 the type at place i mod {len(names)}), so every prefix of the dataset holds them equally. Each type is
-planned, deconfounded and audited on its own, as its own dataset would be. Per-episode scene
+planned, {made} and audited on its own, as its own dataset would be. Per-episode scene
 records (their `referent` and `world` columns name each episode's type and world) and the one-word
 counterfactual instructions are in `meta/scenes.parquet`; each type's confound audit is in
 `meta/audit.json` under `referents`.
@@ -226,7 +235,9 @@ def write_exam(root: Path, referent: Referent, provenance: Provenance, report: d
 
     faces = "\n".join(f"| `{name}` | {text} |" for name, text in FACES.items())
     text = (
-        FRONT_MATTER.format(referent=referent.name).replace("  data_files: data/*/*.parquet", "  data_files: trials.parquet")
+        FRONT_MATTER.format(referent=referent.name, kind="deconfounded").replace(
+            "  data_files: data/*/*.parquet", "  data_files: trials.parquet"
+        )
         + f"""
 # Counterfactual exam: `{referent.name}`
 

@@ -32,6 +32,8 @@ def test_the_confounded_arm_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     record = json.loads((out / "data" / "confounded" / "meta" / "generation.json").read_text())
     assert list(scenes["referent"]) == ["libero_object", "libero_spatial"]
     assert record["config"]["confound"] == ["layout", "layout"], record["config"]
+    card = (out / "data" / "confounded" / "README.md").read_text()
+    assert "- confounded\n" in card and "# Confounded dataset of 2 referent types" in card and "deconfounded" not in card
     results = json.loads((docs / "results_libero_axes.json").read_text())
     rows = {(r["axis"], r["arm"], r["sim"]) for r in results["rows"]}
     assert rows == {("object", "confounded", "ours"), ("relation", "confounded", "ours"), ("object", "named_place", "ours")}

@@ -228,14 +228,19 @@ def test_a_checkpoint_served_over_openpi_takes_an_exam(checkpoint: Path, shared:
 
 
 def test_two_experiment_processes_add_to_one_ledger(tmp_path: Path) -> None:
-    """The arms of an experiment trained side by side keep both their times in timings.json."""
+    """The arms of an experiment trained side by side keep both their times in timings.json, and a
+    stage stopped by Ctrl-C keeps the time it worked."""
     first, second = Ledger(tmp_path), Ledger(tmp_path)
     start = time.perf_counter() - 1.0
     first.spend("train a", start)
     second.spend("train b", start)
     first.spend("train a", start)
+    with pytest.raises(KeyboardInterrupt), second.timing("generate c"):  # stopped part way: its work so far counts
+        time.sleep(0.2)
+        raise KeyboardInterrupt
     spent = json.loads((tmp_path / TIMINGS).read_text())
-    assert set(spent) == {"train a", "train b"} and spent["train a"] >= 2.0 > spent["train b"] >= 1.0
+    assert set(spent) == {"train a", "train b", "generate c"} and spent["train a"] >= 2.0 > spent["train b"] >= 1.0
+    assert spent["generate c"] >= 0.2
 
 
 def test_an_experiment_reuses_a_product_only_if_its_options_made_it(object_dataset: Path, shared: Shared) -> None:
