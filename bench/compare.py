@@ -37,7 +37,7 @@ import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults)
 from core import parquet, worlds
-from core.layout import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
+from core.profiles import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
 from gen.config import parse
 from gen.products import scenes

@@ -31,7 +31,7 @@ from jobs.cli import UserError, main
 class BenchOptions:
     trials: int = 40  # exam trials (each one task + swaps + occ + nonsense rollouts)
     referent: str = "object"  # a referent type (referents/<type>.yaml)
-    profile: str = "native"  # the exam's feature layout: native | libero
+    profile: str = "native"  # the exam's profile: native | libero
     policies: list[str] = field(default_factory=lambda: ["oracle", "random"])  # policies to time (see eval/policies.py)
     workers: list[int] = field(default_factory=lambda: [1, 2])  # worker counts to time each policy at
 

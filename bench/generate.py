@@ -46,7 +46,7 @@ class BenchOptions:
     n: int = 50  # episodes
     referent: str = "object"  # a referent type (referents/<type>.yaml)
     image_size: int = 128  # square camera frames, pixels
-    profiles: List[str] = field(default_factory=lambda: ["native"])  # feature layouts to time, side by side
+    profiles: List[str] = field(default_factory=lambda: ["native"])  # profiles to time, side by side
 
 
 def bench(options: BenchOptions) -> None:

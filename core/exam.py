@@ -62,9 +62,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from core import __version__, contact, parquet, success, worlds
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY, layout
+from core import __version__, contact, parquet, profiles, success, worlds
 from core.products import ANSWERS_FILE, EXAM_PATH, TRIALS_FILE
+from core.profiles import ACTION_KEY, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
@@ -256,14 +256,14 @@ class Exam:
 
     @property
     def profile(self) -> str:
-        """The feature layout the exam speaks (exam.json names it unless it is the native one)."""
+        """The profile the exam speaks (exam.json names it unless it is the native one)."""
         return self.meta.get("profile", NATIVE.name)
 
     @property
     def features(self) -> dict[str, tuple[int, ...]]:
         """Every observation key and the action, with the shape a policy receives or must
         return ((H, W, 3) uint8 frames): what a checkpoint's features are checked against."""
-        features = layout(self.profile)
+        features = profiles.named(self.profile)
         size = self.meta["observation"]["image_size"]
         return {
             **{key: (size, size, 3) for key in features.image_keys},

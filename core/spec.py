@@ -14,8 +14,8 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from core import worlds
-from core.layout import NATIVE, FeatureLayout, layout
+from core import profiles, worlds
+from core.profiles import NATIVE, Profile
 from core.worlds.native import PANDA_HOME
 
 SPEC_VERSION = 1
@@ -82,18 +82,18 @@ class SimSettings:
     fps: int = 20
     cameras: tuple[str, ...] = NATIVE.camera_names
     robot_home: tuple[float, ...] = PANDA_HOME
-    profile: str = NATIVE.name  # the feature layout: cameras, state, action and controller (core/layout.py)
+    profile: str = NATIVE.name  # its features: cameras, state, action and controller (core/profiles.py)
     world: str = "native"  # where the episode happens: arena, robot, cameras, object models (core/worlds/)
     look: str = FAST  # how the cameras draw it (LOOKS)
 
     def __post_init__(self) -> None:
-        layout(self.profile)  # an unknown profile fails here, naming the known ones
+        profiles.named(self.profile)  # an unknown profile fails here, naming the known ones
         if self.look not in LOOKS:
             raise ValueError(f"unknown look {self.look!r}; known: {', '.join(LOOKS)}")
 
     @property
-    def layout(self) -> FeatureLayout:
-        return layout(self.profile)
+    def layout(self) -> Profile:
+        return profiles.named(self.profile)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import ExamError, read
-from core.layout import LIBERO
+from core.profiles import LIBERO
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
 from jobs.cli import Failed, UserError, main

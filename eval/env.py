@@ -30,7 +30,7 @@ from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import SWITCH, Exam, read
-from core.layout import STATE_KEY
+from core.profiles import STATE_KEY
 from core.spec import EpisodeSpec
 from core.success import Outcome, achieved
 from eval.rollout import check_action, observe

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from core.layout import IMAGE_PREFIX, TASK_KEY
+from core.profiles import IMAGE_PREFIX, TASK_KEY
 from eval.policies import Context, PolicyError, require_features
 
 if TYPE_CHECKING:

@@ -36,7 +36,7 @@ import pandas as pd
 
 from core import libero, worlds
 from core.exam import Exam
-from core.layout import IMAGE_PREFIX, STATE_KEY, TASK_KEY
+from core.profiles import IMAGE_PREFIX, STATE_KEY, TASK_KEY
 from core.spec import EpisodeSpec
 from eval.rollout import SimError
 

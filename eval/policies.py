@@ -45,7 +45,7 @@ import numpy as np
 
 from core import worlds
 from core.demo import DemoScript
-from core.layout import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
+from core.profiles import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
 from referents import registry
 

@@ -22,7 +22,7 @@ import socket
 
 import numpy as np
 
-from core.layout import LIBERO, STATE_KEY, TASK_KEY
+from core.profiles import LIBERO, STATE_KEY, TASK_KEY
 from eval.policies import Context, PolicyError
 
 KEYS = ("dataset", "libero")

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from core.exam import SWITCH
-from core.layout import IMAGE_PREFIX, LAYOUTS, NATIVE, STATE_KEY, TASK_KEY, FeatureLayout
+from core.profiles import IMAGE_PREFIX, NATIVE, PROFILES, STATE_KEY, TASK_KEY, Profile
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
 from eval.score import SIM_SUCCESS
@@ -84,7 +84,7 @@ class ProfileMismatch(ValueError):
     no rollout can succeed, so the whole exam stops with this one line."""
 
 
-def check_action(action: object, features: FeatureLayout = NATIVE) -> tuple[np.ndarray | None, str | None]:
+def check_action(action: object, features: Profile = NATIVE) -> tuple[np.ndarray | None, str | None]:
     """A valid action of the `features` profile, or the reason it is not one; an action of
     another profile's shape raises ProfileMismatch."""
     try:
@@ -92,7 +92,7 @@ def check_action(action: object, features: FeatureLayout = NATIVE) -> tuple[np.n
     except (TypeError, ValueError):
         return None, f"action is not numeric ({type(action).__name__})"
     if a.shape != (features.action_size,):
-        other = [f for f in LAYOUTS.values() if (f.action_size,) == a.shape and f is not features]
+        other = [f for f in PROFILES.values() if (f.action_size,) == a.shape and f is not features]
         if other:
             raise ProfileMismatch(
                 f"the policy returns {other[0].name}-profile actions of shape {a.shape}, but this exam is profile "

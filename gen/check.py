@@ -19,8 +19,8 @@ from pathlib import Path
 import av
 import numpy as np
 
-from core.layout import ACTION_KEY, STATE_KEY
 from core.products import INFO_PATH
+from core.profiles import ACTION_KEY, STATE_KEY
 from gen.lerobot.reader import LeRobotReader
 from gen.lerobot.stats import vector_stats
 from gen.products import scenes

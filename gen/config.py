@@ -12,8 +12,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, List, Optional
 
-from core import worlds
-from core.layout import FeatureLayout, layout
+from core import profiles, worlds
+from core.profiles import Profile
 from core.spec import FAST, LOOKS
 from core.worlds import MAX_IMAGE_SIZE, PHYSICS_DT
 from gen.lerobot.video import CODECS
@@ -101,7 +101,7 @@ def validate(cfg: GenConfig) -> None:
         raise UserError(f"{listed} is one per type of a referent list; {cfg.referent} is one type: give one")
     world = resolve_world(cfg)
     try:
-        profile = layout(cfg.profile or world.profiles[0])
+        profile = profiles.named(cfg.profile or world.profiles[0])
     except ValueError as exc:
         raise UserError(str(exc)) from None
     if profile.name not in world.profiles:
@@ -191,7 +191,7 @@ def _validate_mix(cfg: GenConfig) -> None:
         except UserError as exc:
             raise UserError(f"{listed_types}: {item}: {exc}") from None
     recorded = [
-        (item, f"profile {s.profile} ({', '.join(layout(str(s.profile)).image_keys)} at {s.image_size} px)")
+        (item, f"profile {s.profile} ({', '.join(profiles.named(str(s.profile)).image_keys)} at {s.image_size} px)")
         for item, s in zip(names, shares)
     ]
     common = set.intersection(*(set(worlds.world(str(s.world)).profiles) for s in shares))
@@ -203,7 +203,7 @@ def _validate_mix(cfg: GenConfig) -> None:
             raise UserError(f"{listed_types}: {other} and {names[i]} are both {label}: name it once")
     first = shares[0]
     cfg.profile, cfg.image_size, cfg.workers = first.profile, first.image_size, first.workers
-    check_size(cfg, layout(str(cfg.profile)))
+    check_size(cfg, profiles.named(str(cfg.profile)))
 
 
 def finished(cfg: GenConfig) -> dict | None:
@@ -220,7 +220,7 @@ def finished(cfg: GenConfig) -> dict | None:
 PLAN_MEMORY, PLAN_DISK, VIDEO_BYTES_PER_PIXEL, MAX_FRAMES = 12_000, 500, 0.5, 150
 
 
-def check_size(cfg: GenConfig, profile: FeatureLayout) -> None:
+def check_size(cfg: GenConfig, profile: Profile) -> None:
     """Refuse an `n` whose plan could not fit in this machine's memory, or whose product could
     not fit on the disk under `out`, with the estimate."""
     memory = _available_memory()

@@ -16,7 +16,7 @@ from pathlib import Path
 import av
 import numpy as np
 
-from core.layout import ACTION_KEY, STATE_KEY
+from core.profiles import ACTION_KEY, STATE_KEY
 from core.spec import EpisodeSpec
 from gen.lerobot.reader import LeRobotReader
 from gen.products import scenes

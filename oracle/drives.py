@@ -1,4 +1,4 @@
-"""How an action moves the robot: one class per feature layout's controller (core/layout.py).
+"""How an action moves the robot: one class per profile's controller (core/profiles.py).
 
 * `JointServo` (native): seven joint-position targets held by position servos with gravity
   compensation, and a gripper command mapped straight to the finger targets.
@@ -25,7 +25,7 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
-from core.layout import OSC_ORI_LIMIT, OSC_POS_LIMIT
+from core.profiles import OSC_ORI_LIMIT, OSC_POS_LIMIT
 
 FINGER_OPEN = 0.04  # finger joint travel, metres
 

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import mujoco
 import numpy as np
 
-from core.layout import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
+from core.profiles import NATIVE, OSC_ORI_LIMIT, OSC_POS_LIMIT
 from core.spec import EpisodeSpec
 from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene, axis_angle

@@ -3,7 +3,7 @@
 MuJoCo's defaults (4x MSAA, shadows, reflections, collision geoms) cost about 4x more per frame
 on llvmpipe; none of them helps a policy (docs/GENERATE.md: Performance). A scene of the full look
 (core/spec.py) draws reflections, as its world's own simulator does. Cameras are the scene's profile's
-(core/layout.py), and a profile whose frames are stored mirrored gets them mirrored here.
+(core/profiles.py), and a profile whose frames are stored mirrored gets them mirrored here.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import atexit
 import mujoco
 import numpy as np
 
-from core.layout import AGENTVIEW, NATIVE
+from core.profiles import AGENTVIEW, NATIVE
 from core.spec import FULL
 from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
 

@@ -24,8 +24,8 @@ import mujoco
 import numpy as np
 from scipy.optimize import nnls
 
-from core import catalog, worlds
-from core.layout import AGENTVIEW, NATIVE, FeatureLayout, layout
+from core import catalog, profiles, worlds
+from core.profiles import AGENTVIEW, NATIVE, Profile
 from core.spec import FAST, EpisodeSpec, SceneObject, yaw_quat
 from core.worlds import native
 from oracle import meshes, textures
@@ -257,7 +257,7 @@ class Scene:
         self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native", look: str = FAST
     ) -> None:
         self.assets = tuple(sorted(assets))
-        self.layout: FeatureLayout = layout(profile)
+        self.layout: Profile = profiles.named(profile)
         self.world = worlds.world(world)
         self.look = look  # how its cameras draw it (core/spec.py LOOKS; oracle/render.py)
         self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world, look))

@@ -44,7 +44,7 @@ class ObjectsOptions:
 
 def liberos_frames(world: str, cases: list[list[int]], out: Path) -> Path:
     """LIBERO's own `render` of a suite's (task, state) cases, in `.venv-libero` (scripts/libero_reference.py)."""
-    from core.layout import LIBERO
+    from core.profiles import LIBERO
 
     request = out.with_suffix(".json")
     request.write_text(json.dumps({"suite": world, "size": LIBERO.image_size, "cases": cases}))
@@ -60,7 +60,7 @@ def our_frames(
     as LIBERO drew them, and (`labels`) what each pixel shows (`-labels`); drawn with `look`, or as
     a revision before looks drew them (None)."""
     from core import libero, worlds
-    from core.layout import LIBERO
+    from core.profiles import LIBERO
     from gen.planning.plan import default_sim
     from oracle.render import Cameras
     from oracle.scene import scene_for
@@ -114,7 +114,7 @@ def picture(options: ObjectsOptions) -> None:
     from libero_reference import named, object_differences
     from PIL import Image, ImageDraw
 
-    from core.layout import LIBERO
+    from core.profiles import LIBERO
     from core.spec import LOOKS
 
     rows = []

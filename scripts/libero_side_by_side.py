@@ -34,7 +34,7 @@ def picture(options: SideBySideOptions) -> None:
     from libero_objects_side_by_side import liberos_frames, our_frames
     from PIL import Image, ImageDraw
 
-    from core.layout import LIBERO
+    from core.profiles import LIBERO
 
     if not (0 <= options.task < 10 and 0 <= options.state < 50):
         raise UserError(f"task must be in 0..9 and state in 0..49, got {options.task} and {options.state}")

@@ -17,7 +17,7 @@ import pandas as pd
 
 from core import libero
 from core.exam import FACES, Exam, read
-from core.layout import LIBERO, NATIVE
+from core.profiles import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World
 from gen.config import parse
@@ -242,7 +242,7 @@ def liberos_replay(dataset: Path, world: World) -> dict:
     joints and recorded actions; `target` is what moves and `container` where it goes. A world
     with fixtures replays in its suite's own scene, the fixtures where the records stand them. A
     dataset mixing worlds (gen/planning/mix.py) gives the episodes of `world`."""
-    from core.layout import ACTION_KEY
+    from core.profiles import ACTION_KEY
     from gen.lerobot.reader import LeRobotReader
     from gen.products import scenes
 

@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from core import cache_dir, parquet
-from core.layout import ACTION_KEY, LAYOUTS, STATE_KEY, FeatureLayout
 from core.products import EPISODES_PATH, GENERATION_PATH, INFO_PATH, SCENES_PATH, TASKS_PATH
+from core.profiles import ACTION_KEY, PROFILES, STATE_KEY, Profile
 from core.worlds import MAX_IMAGE_SIZE
 from gen.lerobot.reader import LeRobotReader
 
@@ -36,7 +36,7 @@ class DatasetError(ValueError):
 class Frames:
     """All frames of a dataset: images per camera (N, H, W, 3) uint8, state (N, state size), action
     (N, action size), episode index, frame index, task index per frame; tasks; episode bounds;
-    the feature layout (profile) they were recorded in."""
+    the profile they were recorded in."""
 
     images: dict[str, np.ndarray]
     state: np.ndarray
@@ -63,10 +63,10 @@ class Frames:
         return len(self.action)
 
 
-def profile_of(features: dict, root: Path) -> FeatureLayout:
-    """The feature layout (core/layout.py) a dataset's features are: its cameras, state and action."""
-    missing = {p.name: [k for k in (*p.image_keys, STATE_KEY, ACTION_KEY) if k not in features] for p in LAYOUTS.values()}
-    for candidate in LAYOUTS.values():
+def profile_of(features: dict, root: Path) -> Profile:
+    """The profile (core/profiles.py) a dataset's features are: its cameras, state and action."""
+    missing = {p.name: [k for k in (*p.image_keys, STATE_KEY, ACTION_KEY) if k not in features] for p in PROFILES.values()}
+    for candidate in PROFILES.values():
         if not missing[candidate.name]:
             return candidate
     said = "; ".join(f"{name} misses {', '.join(repr(k) for k in keys)}" for name, keys in missing.items())

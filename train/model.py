@@ -34,7 +34,8 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch import nn  # noqa: E402
 
-from core.layout import NATIVE, FeatureLayout, layout  # noqa: E402
+from core import profiles  # noqa: E402
+from core.profiles import NATIVE, Profile  # noqa: E402
 
 TEXT_DIM = 384
 LORA_TARGETS = r".*attention\.(self\.(query|key|value)|output\.dense)"
@@ -52,15 +53,15 @@ class ModelConfig:
     keypoints: int = 32
     hidden: int = 512
     feed_located: bool = False  # the head also reads the auxiliary head's prediction (detached)
-    profile: str = NATIVE.name  # the feature layout it reads and acts in (core/layout.py): cameras, state, action
+    profile: str = NATIVE.name  # the profile it reads and acts in (core/profiles.py): cameras, state, action
     locate_origin: tuple[float, float, float] = (0.0, 0.0, 0.85)  # where the auxiliary target is 0: the scenes' centre
 
     def to_dict(self) -> dict:
         return asdict(self)
 
     @property
-    def features(self) -> FeatureLayout:
-        return layout(self.profile)
+    def features(self) -> Profile:
+        return profiles.named(self.profile)
 
 
 def text_tower(config: ModelConfig) -> tuple[object, nn.Module]:

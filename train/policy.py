@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from core.layout import ACTION_KEY, STATE_KEY
+from core.profiles import ACTION_KEY, STATE_KEY
 from eval.policies import Context, PolicyError, require_features
 
 if TYPE_CHECKING:

@@ -395,12 +395,14 @@ def write_docs(results: dict, docs: Path) -> None:
             named = _face(_find(results, axis, "named_place", "ours"), "obeyed_name")
             chance = next((f"{r['faces']['obeyed_name']['chance']:.0%}" for r in results["rows"] if r["axis"] == axis), "—")
             lines.append(f"| {axis} | {' | '.join(cells)} | {position} | {named} | {chance} |")
-        lines += ["", f"![obeyed name per axis, both arms, in LIBERO's simulator]({PICTURE})", ""]
+        taken = any(r["arm"] in ARMS and r["exam"] == "axis" for r in results["rows"])
+        lines += ["", f"![obeyed name per axis, both arms, in LIBERO's simulator]({PICTURE})", ""] if taken else [""]
         lines += ["## Every face", "", "| axis | arm | sim | " + " | ".join(SHOWN) + " |", "|---|---|---|" + "---|" * len(SHOWN)]
         for axis in axis_rows:
             for r in (x for x in results["rows"] if x["axis"] == axis and x["exam"] == "axis"):
                 lines.append(f"| {axis} | {r['arm']} | {r['sim']} | " + " | ".join(_face(r, f) for f in SHOWN) + " |")
-        plot(results, docs / PICTURE)
+        if taken:  # the picture is of the arms: none taken yet, none drawn
+            plot(results, docs / PICTURE)
     canonical = [r for r in results["rows"] if r["exam"] == "canonical"]
     if canonical:
         lines += [

@@ -74,7 +74,7 @@ class Camera:
     def project(self, points: np.ndarray, size: int, mirrored: bool = False) -> np.ndarray:
         """World points (n, 3) -> where they appear in this camera's upright square frame of
         `size` pixels, (n, 2) as (column, row) in pixels from the top-left corner; `mirrored` for
-        frames stored mirrored left to right (core/layout.py). What teaches a policy where, in its
+        frames stored mirrored left to right (core/profiles.py). What teaches a policy where, in its
         picture, the named object stands (train/fit.py)."""
         local = (np.asarray(points, float) - self.pos) @ self.rotation()
         focal = size / 2 / np.tan(np.radians(self.fovy) / 2)
@@ -115,7 +115,7 @@ class World:
     `builder` names how oracle/scene.py assembles the model (`table`: robosuite's table arena,
     this project's native scenes; `libero`: LIBERO's scene files and object models). `park`
     spots hold the bodies a scene compiles but an episode does not use: out of every camera's
-    view and out of the contact solver. `profiles` are the feature layouts (core/layout.py) the
+    view and out of the contact solver. `profiles` are the profiles (core/profiles.py) the
     world can be recorded in, the first being its default.
     """
 

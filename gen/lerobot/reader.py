@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from core import parquet
-from core.layout import IMAGE_PREFIX
 from core.products import EPISODES_DIR, INFO_PATH, STATS_PATH, TASKS_PATH
+from core.profiles import IMAGE_PREFIX
 
 
 @dataclass(frozen=True)

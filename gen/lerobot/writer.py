@@ -21,8 +21,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from core.layout import IMAGE_PREFIX
 from core.products import DATA_PATH, EPISODES_PATH, VIDEO_PATH
+from core.profiles import IMAGE_PREFIX
 from gen.lerobot import stats as st
 from gen.lerobot.video import VideoFile, video_info
 

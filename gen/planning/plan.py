@@ -16,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core import worlds
-from core.layout import layout
+from core import profiles, worlds
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from gen.config import GenConfig, load_referent
 from gen.planning import mix
@@ -126,7 +125,7 @@ def world_sim(
     world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20, look: str = FAST
 ) -> SimSettings:
     """A world's sim settings: its robot's home, a profile it is recorded in (default its own)."""
-    features = layout(profile or world.profiles[0])
+    features = profiles.named(profile or world.profiles[0])
     return SimSettings(
         image_size=image_size or features.image_size,
         fps=fps,

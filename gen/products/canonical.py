@@ -37,8 +37,8 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from core import exam, libero, worlds
-from core.layout import STATE_KEY, TASK_KEY, layout
+from core import exam, libero, profiles, worlds
+from core.profiles import STATE_KEY, TASK_KEY
 from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings, yaw_of
 from gen.config import check_seed
 from gen.planning.audit import audit
@@ -315,7 +315,7 @@ def build(options: CanonicalOptions) -> None:
 
     started = time.perf_counter()
     world = suite.world
-    profile = layout(world.profiles[0])
+    profile = profiles.named(world.profiles[0])
     sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
     rng = np.random.default_rng(options.seed)
     chosen = {
@@ -380,7 +380,7 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
 
 
 def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSettings, chosen: dict, report: dict) -> dict:
-    features, world, referent = layout(profile), suite.world, suite.referent
+    features, world, referent = profiles.named(profile), suite.world, suite.referent
     named = f"suite={suite.name}" if suite.name != world.suite else f"world={world.name}"
     tasks = {}
     for task in suite.tasks:

@@ -6,8 +6,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from core.layout import ACTION_KEY, NATIVE, STATE_KEY, FeatureLayout
 from core.products import CARD_PATH, PREVIEW_PATH
+from core.profiles import ACTION_KEY, NATIVE, STATE_KEY, Profile
 from gen.products.provenance import Provenance
 from referents.registry import Referent
 from referents.schema import ReferentConfig
@@ -48,7 +48,7 @@ def audit_tables(report: dict) -> str:
     return "\n".join(lines)
 
 
-def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int, features: FeatureLayout) -> str:
+def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int, features: Profile) -> str:
     keys = ", ".join(f"`{k}`" for k in (*features.image_keys, STATE_KEY, ACTION_KEY))
     text = (
         f"{episodes} oracle-verified demonstrations ({frames} frames at {fps} Hz) of a Panda arm in "
@@ -60,7 +60,7 @@ def dataset_contents(episodes: int, frames: int, failed_attempts: int, fps: int,
     return text
 
 
-def profile_note(features: FeatureLayout, fps: int) -> str:
+def profile_note(features: Profile, fps: int) -> str:
     """What the features mean in a non-native profile, said where a fine-tuner looks first."""
     cams = ", ".join(f"`{features.image_key(c)}` ({model})" for c, model in features.cameras.items())
     mirrored = ", stored upright and mirrored left to right as in lerobot's LIBERO datasets" if features.mirrored else ""

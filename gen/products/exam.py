@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from core import exam
-from core.layout import NATIVE, STATE_KEY, TASK_KEY
+from core.profiles import NATIVE, STATE_KEY, TASK_KEY
 from gen.config import GenConfig
 from gen.planning.plan import Planned
 from gen.products import card

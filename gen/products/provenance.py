@@ -17,7 +17,7 @@ from importlib import metadata
 from pathlib import Path
 
 from core import __version__, worlds
-from core.layout import NATIVE
+from core.profiles import NATIVE
 from core.spec import FAST
 from gen.config import GenConfig
 from referents import registry

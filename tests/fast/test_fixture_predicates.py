@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from core import libero
-from core.layout import LIBERO
+from core.profiles import LIBERO
 from core.spec import EpisodeSpec, SceneObject, SimSettings, TaskSpec
 from core.success import OPEN_TRAVEL, TURN_ON, Outcome, achieved
 

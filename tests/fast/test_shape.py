@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from core.layout import LAYOUTS
+from core.profiles import PROFILES
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts/import_graph.py"
@@ -30,12 +30,12 @@ def test_the_architecture_page_shows_the_current_import_graph() -> None:
 
 def test_camera_names_and_feature_keys_live_only_in_the_layout_module() -> None:
     names = set()
-    for layout in LAYOUTS.values():
+    for layout in PROFILES.values():
         names |= {*layout.cameras, *layout.cameras.values(), *layout.image_keys}
     found = []
     for package in PACKAGES:
         for path in (ROOT / package).rglob("*.py"):
-            if path == ROOT / "core/layout.py":
+            if path == ROOT / "core/profiles.py":
                 continue
             for node in ast.walk(ast.parse(path.read_text())):
                 if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:

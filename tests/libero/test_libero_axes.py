@@ -22,7 +22,7 @@ from lerobot.datasets.lerobot_dataset import LeRobotDataset  # before any GL con
 
 from core import worlds
 from core.exam import read
-from core.layout import LIBERO
+from core.profiles import LIBERO
 from core.spec import EpisodeSpec
 from eval.battery import take
 from eval.registry import make

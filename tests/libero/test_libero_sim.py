@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from core.exam import SWITCH, read
-from core.layout import STATE_KEY, TASK_KEY
+from core.profiles import STATE_KEY, TASK_KEY
 from eval.battery import take
 from eval.policies import Context
 from helpers import make_dataset

@@ -16,7 +16,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL c
 
 from core import libero, worlds
 from core.exam import read
-from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS
 from eval.battery import take
 from eval.registry import make

@@ -18,8 +18,8 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL c
 
 from core import libero, worlds
 from core.exam import read
-from core.layout import ACTION_KEY, LIBERO, STATE_KEY
 from core.products import ROLLOUTS
+from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec, yaw_quat
 from core.success import Outcome, contained
 from eval.battery import take

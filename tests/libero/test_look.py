@@ -13,7 +13,7 @@ import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
 
 from core.exam import read
-from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, FULL, EpisodeSpec
 from eval.env import ExamEnv
 from gen.config import parse

@@ -18,7 +18,7 @@ import pytest
 from peft import PeftModel
 
 from core.exam import read
-from core.layout import ACTION_KEY, IMAGE_PREFIX, TASK_KEY
+from core.profiles import ACTION_KEY, IMAGE_PREFIX, TASK_KEY
 from eval.policies import FeatureMismatch, PolicyError
 from eval.registry import make
 from helpers import ONE_TRIAL_64, Shared

@@ -14,7 +14,7 @@ import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core.exam import read
-from core.layout import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
+from core.profiles import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
 from core.spec import EpisodeSpec, SimSettings
 from core.success import succeeded
 from eval.battery import take

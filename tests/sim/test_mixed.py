@@ -15,7 +15,7 @@ import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # lerobot's own loader, before any GL context
 from PIL import Image
 
-from core.layout import ACTION_KEY, LIBERO, STATE_KEY
+from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import EpisodeSpec
 from gen.config import GenConfig, parse
 from gen.planning.plan import designs, plan_and_audit

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from core import worlds
-from core.layout import LAYOUTS, NATIVE
+from core.profiles import NATIVE, PROFILES
 from core.spec import SimSettings
 from core.worlds.native import TABLE_TOP_Z
 from gen.planning.plan import default_sim, plan
@@ -86,7 +86,7 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
     mirrored profile."""
     referent = registry.load(name)
     sim = default_sim(referent)
-    camera = LAYOUTS[sim.profile].agentview
+    camera = PROFILES[sim.profile].agentview
     for spec in plan(referent, 2, seed=3, sim=sim):
         scene = spec_scene(spec)
         scene.reset(spec)

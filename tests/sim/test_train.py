@@ -17,7 +17,7 @@ import pytest
 import torch
 
 from core.exam import read
-from core.layout import NATIVE
+from core.profiles import NATIVE
 from eval.battery import take
 from eval.policies import FeatureMismatch
 from eval.registry import make

@@ -1,9 +1,9 @@
-"""The recorded features: camera, state and action names and shapes, and the joint limits.
+"""The profiles (`profile=` of the generator): the recorded features, camera, state and action
+names and shapes, and the joint limits.
 
 Every consumer reads them from here — the writer and the reader, training, the exam's
-environment and policies — so a dimension or a camera name is written down once. A layout (a
-`profile=` of the generator) is what one dataset or exam records and how its actions drive the
-arm:
+environment and policies — so a dimension or a camera name is written down once. A profile is
+what one dataset or exam records and how its actions drive the arm:
 
 * `native` — joint-position targets through position servos, a 16-d state, 128 px cameras;
 * `libero` — the convention of LIBERO and the VLAs trained on it (lerobot's LIBERO datasets):
@@ -37,8 +37,8 @@ LIBERO_SETTLE_STEPS = 10  # lerobot's LIBERO env sends this many [0]*6+[-1] acti
 
 
 @dataclass(frozen=True)
-class FeatureLayout:
-    """What a dataset records and a policy exchanges each control step.
+class Profile:
+    """A profile: what a dataset records and a policy exchanges each control step.
 
     `cameras` maps each recorded camera (feature name) to the model camera it renders; actions
     are bounded by `action_low`/`action_high` elementwise.
@@ -87,7 +87,7 @@ class FeatureLayout:
         return np.array([*arm, GRIPPER_OPEN], np.float32)
 
 
-NATIVE = FeatureLayout(
+NATIVE = Profile(
     name="native",
     cameras={AGENTVIEW: "agentview", WRIST: "robot0_eye_in_hand"},
     state_names=(
@@ -109,7 +109,7 @@ NATIVE = FeatureLayout(
     controller="joint_servo",
     image_size=128,
 )
-LIBERO = FeatureLayout(
+LIBERO = Profile(
     name="libero",
     cameras={"image": "agentview", "image2": "robot0_eye_in_hand"},
     state_names=(
@@ -134,12 +134,12 @@ LIBERO = FeatureLayout(
     mirrored=True,
     settle_steps=LIBERO_SETTLE_STEPS,
 )
-LAYOUTS = {layout.name: layout for layout in (NATIVE, LIBERO)}
+PROFILES = {profile.name: profile for profile in (NATIVE, LIBERO)}
 
 
-def layout(name: str) -> FeatureLayout:
-    """The layout called `name`, or a ValueError naming the known ones."""
+def named(name: str) -> Profile:
+    """The profile called `name` (a `profile=` option's value), or a ValueError naming the known ones."""
     try:
-        return LAYOUTS[name]
+        return PROFILES[name]
     except KeyError:
-        raise ValueError(f"unknown profile {name!r}; known: {', '.join(LAYOUTS)}") from None
+        raise ValueError(f"unknown profile {name!r}; known: {', '.join(PROFILES)}") from None
