@@ -301,7 +301,8 @@ def _finished(report_dir: Path, digest: str | None) -> dict | None:
 
 
 def collect(options: ReleaseOptions) -> dict:
-    """Every finished result under `out`, whichever process took it: the rows the docs show."""
+    """Every finished result under `out`, whichever process took it: the rows the docs show (the
+    options it was begun with, `claim`'s, are added by `release`)."""
     from jobs.partial import Partial
     from train.stages import train_log
 
@@ -334,7 +335,6 @@ def collect(options: ReleaseOptions) -> dict:
         if report is not None:
             rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "faces": report["faces"]})
     return {
-        "settings": {k: getattr(options, k) for k in DETERMINING},
         "out": options.out,
         "libero_arms": options.libero,
         "confounded_arm": {axis: confound for axis, (_, confound) in AXES.items()},
