@@ -237,6 +237,7 @@ class LiberoSim:
         self._now: dict[str, np.ndarray] = {}
         self.setup: Setup | None = None
         self.spec: EpisodeSpec | None = None
+        self._containers: set[str] = set()  # the row's movable containers (a basket), whose turns are logged
 
     def _ask(self, header: dict, arrays: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str, np.ndarray]]:
         from eval.libero_server import write_frame
@@ -269,6 +270,7 @@ class LiberoSim:
         request = {"op": "reset", "seed": int(row["trial"]), "objects": setup.objects, "sites": setup.sites, **start}
         _, self._now = self._ask(request, arrays)
         self.setup, self.spec = setup, spec
+        self._containers = {o.id for o in spec.objects if self.rows.world.kind(o.kind).contain is not None}
 
     def step(self, action: np.ndarray) -> None:
         _, self._now = self._ask({"op": "step", "images": False}, {"action": np.asarray(action, np.float64)})
@@ -282,10 +284,9 @@ class LiberoSim:
 
     def turns(self) -> dict[str, tuple[float, ...]]:
         """How each movable container (a basket) is turned now: its body's orientation in LIBERO."""
-        assert self.setup is not None and self.spec is not None
+        assert self.setup is not None
         ids = self.setup.ids[: len(self.setup.objects)]
-        containers = {o.id for o in self.spec.objects if self.rows.world.kind(o.kind).contain is not None}
-        return {i: tuple(float(v) for v in q) for i, q in zip(ids, self._now["quats"]) if i in containers}
+        return {i: tuple(float(v) for v in q) for i, q in zip(ids, self._now["quats"]) if i in self._containers}
 
     def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
         from oracle.scene import axis_angle

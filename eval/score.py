@@ -226,19 +226,26 @@ def _turns(log: pd.Series, steps: int) -> dict[str, np.ndarray]:
     value = log.get("turns")
     if value is None or (np.ndim(value) == 0 and pd.isna(value)):
         return {}
+    turns = _per_object(log, "turns", "w, x, y, z")
+    if any(len(v) != steps for v in turns.values()):
+        raise LogError(f"row {log['row']}: every turned container needs one orientation per end-effector position")
+    return turns
+
+
+def _per_object(log: pd.Series, column: str, names: str) -> dict[str, np.ndarray]:
+    """A JSON column {object id: [[`names`], ...]} as arrays, one row per step, or a LogError
+    naming the column, the shape it must have and the row."""
+    value = log[column]
     try:
         decoded = json.loads(value)
         if not isinstance(decoded, dict):
             raise TypeError
-        turns = {str(k): np.asarray(v, float).reshape(-1, 4) for k, v in decoded.items()}
+        return {str(k): np.asarray(v, float).reshape(-1, len(names.split(", "))) for k, v in decoded.items()}
     except (TypeError, ValueError):
         raise LogError(
-            f"column 'turns' must hold a JSON string {{object id: [[w, x, y, z], ...]}} per rollout; row {log['row']} "
-            f"has a {type(value).__name__}"
+            f"column '{column}' must hold a JSON string {{object id: [[{names}], ...]}} per rollout; "
+            f"row {log['row']} has a {type(value).__name__}"
         ) from None
-    if any(len(v) != steps for v in turns.values()):
-        raise LogError(f"row {log['row']}: every turned container needs one orientation per end-effector position")
-    return turns
 
 
 def _optional(log: pd.Series, column: str, size: int) -> np.ndarray | None:
@@ -289,17 +296,7 @@ def _positions(log: pd.Series) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         raise LogError(
             f"column 'ee' must hold each rollout's end-effector positions, a list of [x, y, z]; row {row} has a {got}"
         ) from None
-    try:
-        decoded = json.loads(log["objects"])
-        if not isinstance(decoded, dict):
-            raise TypeError
-        objects = {str(k): np.asarray(v, float).reshape(-1, 3) for k, v in decoded.items()}
-    except (TypeError, ValueError):
-        got = type(log["objects"]).__name__
-        raise LogError(
-            f"column 'objects' must hold a JSON string {{object id: [[x, y, z], ...]}} per rollout; row {row} has a {got}"
-        ) from None
-    return ee, objects
+    return ee, _per_object(log, "objects", "x, y, z")
 
 
 def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None = None) -> dict:

@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL context (docs/GENERATE.md: why these pins)
@@ -127,12 +128,10 @@ def test_a_turned_basket_holds_what_liberos_in_says_it_holds(tmp_path: Path) -> 
 
 def _turned(rest: tuple[float, ...], axis: str, angle: float) -> tuple[float, ...]:
     """`rest` turned by `angle` about the world's `axis`."""
-    half = np.zeros(3)
-    half["xyz".index(axis)] = np.sin(angle / 2)
-    w1, (x1, y1, z1) = np.cos(angle / 2), half
-    w2, x2, y2, z2 = rest
-    return (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)  # fmt: skip
+    turn, turned = np.zeros(4), np.zeros(4)
+    mujoco.mju_axisAngle2Quat(turn, np.eye(3)["xyz".index(axis)], angle)
+    mujoco.mju_mulQuat(turned, turn, np.asarray(rest, float))
+    return tuple(float(v) for v in turned)
 
 
 def _basket_spec(basket: list[float], soup: list[float]) -> EpisodeSpec:
