@@ -76,7 +76,7 @@ def run(cfg: GenConfig) -> float:
     plan = designs(ref, n, seed=0)
     oracle = record = write = 0.0
     first_try = attempts = frames = 0
-    features = sim.layout
+    features = sim.interface
     writer = LeRobotWriter(Path(cfg.out), Recording(sim.fps, size, sim.cameras, features.state_names, features.action_names))
     for i, design in enumerate(plan):
         t0 = time.perf_counter()

@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from core.furniture import Drawer, Knob, Shelf, Spot
+
 # Named colors an instruction may use, as RGBA.
 COLORS: dict[str, tuple[float, float, float, float]] = {
     "red": (0.85, 0.10, 0.10, 1.0),
@@ -34,9 +36,9 @@ class Kind:
     """A buildable object.
 
     `model` is the robosuite class in `robosuite.models.objects` and `params` its constructor
-    arguments (`libero`: LIBERO's model file `params["xml"]`; `site`: a place on a fixture, which no
-    scene moves: the fixture's site `params["site"]`, or the point `params["offset"]` in the frame of
-    its body `params["body"]`, carried along as the body moves (a drawer, a knob); core/libero.py); `size` is
+    arguments (`libero`: LIBERO's model file `params["xml"]`, its drawn mesh cut to `params["faces"]`
+    triangles; `site`: a place on a fixture, which no scene moves, where `spot` says, and a part of
+    the furniture where `drawer`, `knob` or `shelf` says which: core/furniture.py); `size` is
     the extent (x, y, z) in the object's resting frame (its model frame turned by `quat`),
     `bottom` the height of its lowest point below the body origin, and `grasp_axis` the
     resting-frame axis ("x" or "y") the fingers close along: the narrower one. Colorable kinds
@@ -63,6 +65,11 @@ class Kind:
     rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
+    neck: bool = False  # held by a narrow neck (a bottle): it swings, so it is carried gently (oracle/motion.py GENTLE)
+    spot: Spot | None = None  # a place on a fixture: where it is
+    drawer: Drawer | None = None
+    knob: Knob | None = None
+    shelf: Shelf | None = None
 
     @property
     def is_site(self) -> bool:
@@ -72,11 +79,10 @@ class Kind:
 
     @property
     def anchor(self) -> str:
-        """Where a place on a fixture is, as another simulator is asked to follow it: its site's
-        name, or `<body>@<x>,<y>,<z>` (eval/libero_server.py reads both)."""
-        if "site" in self.params:
-            return str(self.params["site"])
-        return f"{self.params['body']}@{','.join(map(str, self.params['offset']))}"
+        """Where a place on a fixture is, as another simulator is asked to follow it (`Spot.anchor`)."""
+        if self.spot is None:
+            raise ValueError(f"{self.name} is not a place on a fixture")
+        return self.spot.anchor
 
     @property
     def noun(self) -> str:

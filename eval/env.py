@@ -31,8 +31,9 @@ from gymnasium import spaces
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import SWITCH, Exam, read
 from core.profiles import STATE_KEY
+from core.programs import achieved
 from core.spec import EpisodeSpec
-from core.success import Outcome, achieved
+from core.success import Outcome
 from eval.rollout import check_action, observe
 from oracle.render import Cameras
 from oracle.scene import spec_scene
@@ -65,7 +66,7 @@ class ExamEnv(gym.Env):
         self.episode = EpisodeSpec.from_json(self.row["spec"])
         self.render_mode = render_mode
         size = self.episode.sim.image_size
-        self.features = features = self.episode.sim.layout
+        self.features = features = self.episode.sim.interface
         self.observation_space = spaces.Dict(
             {
                 **{features.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},

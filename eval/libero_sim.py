@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from core import libero, worlds
+from core import libero, programs, worlds
 from core.exam import Exam
 from core.profiles import IMAGE_PREFIX, STATE_KEY, TASK_KEY
 from core.spec import EpisodeSpec
@@ -201,11 +201,11 @@ class Rows:
 def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> list[str] | None:
     """LIBERO's goal predicate of a row's ask (carry what the program moves to where it goes; a
     motion of the furniture), or None where LIBERO has no predicate for the program."""
-    params = spec.task.params
+    params, own = spec.task.params, programs.named(program).libero
     where = dict(zip(setup.ids, (*setup.objects, *setup.sites)))
-    if program in libero.GOALS:
+    if own is not None:
         place = libero.place_name(worlds.kind(spec.object(target).kind, spec.sim.world), where[target])
-        return libero.goal(program, place, where[params["object"]] if "object" in params else None)
+        return libero.goal(own, place, where[params["object"]] if "object" in params else None)
     if "object" in params:
         moved, destination = params["object"], target
     elif "destination" in params:
@@ -262,7 +262,7 @@ class LiberoSim:
     def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None:
         setup = self.rows.setup(spec)
         if setup.key != self._key:
-            cameras = [spec.sim.layout.cameras[c] for c in spec.sim.cameras] if render else []
+            cameras = [spec.sim.interface.cameras[c] for c in spec.sim.cameras] if render else []
             self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "cameras": cameras, **setup.bddl})
             self._key = setup.key
         arrays = {"state": setup.state} if setup.state is not None else {}
@@ -296,10 +296,10 @@ class LiberoSim:
         state = np.concatenate([now["ee"], axis_angle(now["hand_quat"]), now["fingers"]]).astype(np.float32)
         obs: dict = {STATE_KEY: state, TASK_KEY: instruction}
         if images:
-            size, layout = self.spec.sim.image_size, self.spec.sim.layout
+            size, interface = self.spec.sim.image_size, self.spec.sim.interface
             frames = {} if occluded else self._ask({"op": "render"})[1]
             for cam in self.spec.sim.cameras:
-                raw = frames.get(layout.cameras[cam])
+                raw = frames.get(interface.cameras[cam])
                 obs[IMAGE_PREFIX + cam] = np.zeros((size, size, 3), np.uint8) if raw is None else raw[::-1, ::-1].copy()
         return obs
 

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from core import worlds
+from core import programs, worlds
 from core.demo import DemoScript
 from core.profiles import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
@@ -117,12 +117,12 @@ class Scripted:
             return None
         spec, target = self._heading
         where = np.asarray([spec.object(target).pos])
-        return worlds.world(spec.sim.world).agentview.project(where, spec.sim.image_size, spec.sim.layout.mirrored)[0]
+        return worlds.world(spec.sim.world).agentview.project(where, spec.sim.image_size, spec.sim.interface.mirrored)[0]
 
     def _demo(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> Demo:
         """The demonstration from where the rollout will start: the trial's initial state after
         the profile's settle steps (its `states`: the physics state before each action)."""
-        return self._demonstrate(spec, demo, context.initial_state, spec.sim.layout.settle_steps)
+        return self._demonstrate(spec, demo, context.initial_state, spec.sim.interface.settle_steps)
 
     def _demonstrate(
         self, spec: EpisodeSpec, demo: DemoScript, state: np.ndarray | None, settle: int, prefix: Sequence[np.ndarray] = ()
@@ -160,7 +160,7 @@ class Oracle(Scripted):
         step = context.switch[0]
         self._heading = (spec, spec.target)  # the original ask, until the switch
         before = list(self._demo(spec, script, context).actions[:step])
-        then = self._demonstrate(asked, script, context.initial_state, spec.sim.layout.settle_steps, before)
+        then = self._demonstrate(asked, script, context.initial_state, spec.sim.interface.settle_steps, before)
         self._actions, self._t = [*before, *then.actions], 0
 
 
@@ -174,8 +174,7 @@ class Position(Scripted):
     def reset(self, context: Context) -> None:
         referent = registry.load(context.spec.referent, world=context.spec.sim.world)
         chosen = self._chosen(referent, context)
-        script = registry.pick_and_lift if chosen.task.program == "pick" else referent.demo
-        self._actions, self._t = self._actions_for(chosen, script, context), 0
+        self._actions, self._t = self._actions_for(chosen, programs.perform, context), 0
 
 
 class NamedPlace(Position):
@@ -196,7 +195,7 @@ class Nothing:
     needs_images = False
 
     def reset(self, context: Context) -> None:
-        self._hold = context.spec.sim.layout.hold_action(context.spec.sim.robot_home)
+        self._hold = context.spec.sim.interface.hold_action(context.spec.sim.robot_home)
 
     def act(self, observation: dict) -> np.ndarray:
         return self._hold
@@ -211,7 +210,7 @@ class Random:
 
     def reset(self, context: Context) -> None:
         self._rng = np.random.default_rng(context.seed)
-        self._deltas = context.spec.sim.layout.controller != NATIVE.controller
+        self._deltas = context.spec.sim.interface.controller != NATIVE.controller
         self._q = np.asarray(context.spec.sim.robot_home, float).copy()
         self._gripper = GRIPPER_OPEN
 

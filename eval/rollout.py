@@ -224,7 +224,7 @@ class Runner:
         except Exception as exc:  # a broken policy fails its rollout, not the run
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
-        features, sim, render = spec.sim.layout, self.sim, self.policy.needs_images
+        features, sim, render = spec.sim.interface, self.sim, self.policy.needs_images
         try:
             sim.begin(row, spec, render)
             log.record(sim)

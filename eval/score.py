@@ -81,12 +81,13 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from core import contact, worlds
+from core import contact, programs, worlds
 from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, ExamError, decode_objects, read
 from core.products import EXAM_PATH
+from core.programs import achieved
 from core.rates import Rate, against_chance, cluster_ci
 from core.spec import EpisodeSpec
-from core.success import BRINGS, MOTIONS, Outcome, achieved
+from core.success import Outcome
 from eval.baseline import REPORT_VERSION, SHORTCUT, cached_baseline, exam_digest
 from jobs.cli import UserError, main
 
@@ -111,7 +112,8 @@ def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: 
     the object's grasp point (a bowl's: its rim) or the release point over a destination, the
     places the oracle's skills go to (core/contact.py)."""
     kind = worlds.kind(spec.object(target).kind, spec.sim.world)
-    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if program in BRINGS else None
+    brings = programs.named(program).brings
+    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if brings else None
     return contact.distance(kind, objects[target], ee, carried)
 
 
@@ -148,7 +150,7 @@ def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tup
     carries something into, and the alternatives'. A landing there is a distractor's, and chance
     is one over the alternatives and these together."""
     program = alternatives[0][1]
-    if program in BRINGS + MOTIONS:
+    if not programs.named(program).lands:
         return []
     params, named = spec.task.params, {target for target, _ in alternatives}
     kept = {params.get("destination"), params.get("object"), *named}

@@ -13,9 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core import programs
 from core.demo import DemoScript
+from core.programs import succeeded
 from core.spec import EpisodeSpec
-from core.success import BRINGS, Outcome, succeeded
+from core.success import Outcome
 from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene
 from oracle.skills import Skills
@@ -54,7 +56,7 @@ def demonstrate(
     if state is not None:
         scene.set_physics_state(state)
     for _ in range(settle):
-        scene.step(scene.layout.hold_action(spec.sim.robot_home))
+        scene.step(scene.interface.hold_action(spec.sim.robot_home))
     start = scene.positions()
     for action in prefix:
         scene.step(np.asarray(action))
@@ -67,7 +69,7 @@ def demonstrate(
     except IKError as exc:
         return Demo(
             spec,
-            np.asarray(skills.actions, np.float32).reshape(-1, spec.sim.layout.action_size),
+            np.asarray(skills.actions, np.float32).reshape(-1, spec.sim.interface.action_size),
             np.asarray(skills.states),
             None,
             False,
@@ -101,7 +103,7 @@ def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
     instruction still means a course to change: nothing is held yet. None if the thing never moves
     or the hand never comes so near before it does."""
     spec = demo.spec
-    first = spec.task.params["object"] if spec.task.program in BRINGS else spec.target
+    first = programs.named(spec.task.program).moved(spec, spec.target)
     path = []
     for state in demo.states:
         scene.set_physics_state(state)

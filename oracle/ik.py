@@ -7,6 +7,7 @@ import mink
 import mujoco
 import numpy as np
 
+from core.rotations import yaw_matrix
 from oracle.drives import FINGER_OPEN
 from oracle.scene import EE_SITE, robot_xml
 
@@ -14,32 +15,8 @@ from oracle.scene import EE_SITE, robot_xml
 DOWN = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
-def facing(direction: tuple[float, float], roll: float = 0.0) -> np.ndarray:
-    """The grip site pointing level along the horizontal `direction`, fingers closing up and down,
-    turned `roll` about that direction: how a hand takes a drawer's handle bar from the front. (The
-    columns are the grip frame's axes: closing, across, approach; closing down rather than up keeps
-    the Panda's wrist within its range.)"""
-    x, y = np.asarray(direction, float) / np.hypot(*direction)
-    down, across = np.array([0.0, 0.0, -1.0]), np.array([-y, x, 0.0])
-    c, s = np.cos(roll), np.sin(roll)
-    return np.column_stack([c * down + s * across, c * across - s * down, [x, y, 0.0]])
-
-
-def turned(axis: np.ndarray, angle: float) -> np.ndarray:
-    """The rotation by `angle` about the unit vector `axis` (Rodrigues): a held bottle turned down
-    along a sloping shelf."""
-    x, y, z = axis
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * k @ k
-
-
 class IKError(RuntimeError):
     """The pose is out of reach: IK did not converge."""
-
-
-def yaw_matrix(yaw: float) -> np.ndarray:
-    c, s = np.cos(yaw), np.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def grasp_yaw(axis_angle: float) -> float:

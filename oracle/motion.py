@@ -49,7 +49,7 @@ class Motion:
         self.gripper = OPEN
         self.actions: list[np.ndarray] = []
         self.states: list[np.ndarray] = []  # physics state before each action
-        self.deltas = scene.layout.controller != NATIVE.controller
+        self.deltas = scene.interface.controller != NATIVE.controller
         # joints to seed IK from where the arm's own pose leads it to none (a plan begun mid-course,
         # its wrist turned for another object); None: a plan from the arm's start never needs it
         self.reseed: np.ndarray | None = None

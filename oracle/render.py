@@ -20,7 +20,7 @@ from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
 
 class Cameras:
     def __init__(self, scene: Scene, size: int, cameras: tuple[str, ...]) -> None:
-        known = scene.layout.cameras
+        known = scene.interface.cameras
         unknown = [c for c in cameras if c not in known]
         if unknown:
             raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(known)}")
@@ -34,7 +34,7 @@ class Cameras:
         for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_SKYBOX):
             flags[flag] = False
         flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = scene.look == FULL
-        self.options = {c: self._option(scene.layout.cameras[c]) for c in cameras}
+        self.options = {c: self._option(scene.interface.cameras[c]) for c in cameras}
         self._buffers = {c: np.empty((size, size, 3), np.uint8) for c in cameras}
         self._names: np.ndarray | None = None  # labels(): each geom's object, read from the model at the first call
         self._closed = False
@@ -54,11 +54,11 @@ class Cameras:
 
     def render(self) -> dict[str, np.ndarray]:
         """One frame per camera; the arrays are reused by the next call."""
-        layout = self.scene.layout
+        interface = self.scene.interface
         for cam in self.cameras:
-            self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.options[cam])
+            self.renderer.update_scene(self.scene.data, camera=interface.cameras[cam], scene_option=self.options[cam])
             self.renderer.render(out=self._buffers[cam])
-            if layout.mirrored:
+            if interface.mirrored:
                 self._buffers[cam][:] = self._buffers[cam][:, ::-1]
         return self._buffers
 
@@ -84,14 +84,14 @@ class Cameras:
 
     def geoms(self, cameras: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
         """Per camera, the geom each pixel of its frame shows (-1 for none), mirrored as the frames are."""
-        layout, out = self.scene.layout, {}
+        interface, out = self.scene.interface, {}
         self.renderer.enable_segmentation_rendering()
         try:
             for cam in cameras or self.cameras:
-                self.renderer.update_scene(self.scene.data, camera=layout.cameras[cam], scene_option=self.options[cam])
+                self.renderer.update_scene(self.scene.data, camera=interface.cameras[cam], scene_option=self.options[cam])
                 seg = self.renderer.render()  # (objid, objtype) per pixel
                 geoms = np.where(seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM, seg[..., 0], -1)
-                out[cam] = geoms[:, ::-1] if layout.mirrored else geoms
+                out[cam] = geoms[:, ::-1] if interface.mirrored else geoms
         finally:
             self.renderer.disable_segmentation_rendering()
         return out

@@ -26,7 +26,8 @@ from scipy.optimize import nnls
 
 from core import catalog, profiles, worlds
 from core.profiles import AGENTVIEW, NATIVE, Profile
-from core.spec import FAST, EpisodeSpec, SceneObject, yaw_quat
+from core.rotations import IDENTITY, yaw_quat
+from core.spec import FAST, EpisodeSpec, SceneObject
 from core.worlds import native
 from oracle import meshes, textures
 from oracle.drives import SERVO_KP, SERVO_KV, Drive, JointServo, OscPose
@@ -46,7 +47,6 @@ ARM_JOINTS = tuple(f"robot0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
-IDENTITY = (1.0, 0.0, 0.0, 0.0)
 LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
@@ -257,13 +257,13 @@ class Scene:
         self, assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, world: str = "native", look: str = FAST
     ) -> None:
         self.assets = tuple(sorted(assets))
-        self.layout: Profile = profiles.named(profile)
+        self.interface: Profile = profiles.named(profile)
         self.world = worlds.world(world)
         self.look = look  # how its cameras draw it (core/spec.py LOOKS; oracle/render.py)
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.layout.controller, world, look))
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(self.assets, self.interface.controller, world, look))
         m = self.model
         self.data = mujoco.MjData(m)
-        servo = self.layout.controller == NATIVE.controller
+        servo = self.interface.controller == NATIVE.controller
         self.drive: Drive = JointServo(m, self.data) if servo else OscPose(m, self.data, ARM_JOINTS, EE_SITE)
         self.arm_qpos = np.array([m.joint(j).qposadr[0] for j in ARM_JOINTS])
         self.finger_qpos = np.array([m.joint(j).qposadr[0] for j in FINGER_JOINTS])
@@ -280,9 +280,11 @@ class Scene:
         for kind_name, count in self.assets:
             kind = self.world.kind(kind_name)
             if kind.is_site:  # the fixture's site, or a point on its body: where it is, the scene's positions read
-                site = m.site(kind.params["site"]).id if "site" in kind.params else -1
-                body_id = int(m.site_bodyid[site]) if site >= 0 else m.body(kind.params["body"]).id
-                offset = None if site >= 0 else np.asarray(kind.params["offset"], float)
+                spot = kind.spot
+                assert spot is not None
+                site = m.site(spot.site).id if spot.site else -1
+                body_id = int(m.site_bodyid[site]) if site >= 0 else m.body(spot.body).id
+                offset = None if site >= 0 else np.asarray(spot.offset, float)
                 geoms = tuple(g for g in range(m.ngeom) if _descends(m, m.geom_bodyid[g], body_id))
                 self.bodies[kind_name] = [Body(kind, body_id, -1, geoms, np.zeros(7), (), site, offset)]
                 continue
@@ -307,7 +309,7 @@ class Scene:
         home, world = np.asarray(spec.sim.robot_home), self.world
         d.qpos[self.arm_qpos] = home
         d.qpos[self.finger_qpos] = (world.finger_home, -world.finger_home)
-        d.ctrl[:7] = home if self.layout.controller == NATIVE.controller else 0.0  # servo targets, or torques
+        d.ctrl[:7] = home if self.interface.controller == NATIVE.controller else 0.0  # servo targets, or torques
         d.ctrl[7:9] = (world.finger_target, -world.finger_target)
         free = {kind: list(bodies) for kind, bodies in self.bodies.items()}
         self.placed = {}
@@ -338,12 +340,7 @@ class Scene:
             m.geom_group[g] = HIDDEN_GROUP if parked else group
 
     def _pose(self, body: Body, obj: SceneObject) -> None:
-        if body.kind.quat == IDENTITY:
-            half = obj.yaw / 2
-            quat: tuple[float, ...] = (np.cos(half), 0.0, 0.0, np.sin(half))
-        else:
-            quat = yaw_quat(obj.yaw, body.kind.quat)
-        self.data.qpos[body.qpos_adr : body.qpos_adr + 7] = (*obj.pos, *quat)
+        self.data.qpos[body.qpos_adr : body.qpos_adr + 7] = (*obj.pos, *yaw_quat(obj.yaw, body.kind.quat))
         if body.kind.colorable:
             rgba = catalog.COLORS[obj.attributes.get("color", "white")]
             for g in body.geom_ids:
@@ -356,7 +353,7 @@ class Scene:
     def settle(self, spec: EpisodeSpec) -> None:
         """The actions holding the robot that the profile's own environment runs before a policy
         acts (lerobot's LIBERO env: 10; none natively): an exam rollout's first observation follows them."""
-        features = spec.sim.layout
+        features = spec.sim.interface
         for _ in range(features.settle_steps):
             self.step(features.hold_action(spec.sim.robot_home))
 
@@ -364,7 +361,7 @@ class Scene:
         """Settle, then where the end effector and every object stand: a rollout's step 0 when
         its loop logs from the observation `reset()` returns (exam answers' `settled_start`);
         None where the profile has no settle steps (`reset()` leaves the initial state)."""
-        if not spec.sim.layout.settle_steps:
+        if not spec.sim.interface.settle_steps:
             return None
         self.settle(spec)
         return {"ee": [float(v) for v in self.ee_pos()], "objects": {k: list(v) for k, v in self.positions().items()}}
@@ -379,7 +376,7 @@ class Scene:
         d = self.data
         mujoco.mj_kinematics(self.model, d)
         fingers = d.qpos[self.finger_qpos]
-        if self.layout.controller == NATIVE.controller:
+        if self.interface.controller == NATIVE.controller:
             quat = np.zeros(4)
             mujoco.mju_mat2Quat(quat, d.site_xmat[self.ee_site])
             return np.concatenate([d.qpos[self.arm_qpos], fingers, d.site_xpos[self.ee_site], quat])

@@ -10,24 +10,15 @@ from __future__ import annotations
 import numpy as np
 
 from core import contact
+from core.rotations import yaw_matrix
 from core.success import PUSH_DIRECTION
-from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
-from oracle.ik import DOWN, IKError, facing, grasp_yaw, turned, yaw_matrix
+from oracle.clearance import CARRY_MARGIN, FINGER_TIP
+from oracle.furniture import FurnitureSkills
+from oracle.ik import IKError, grasp_yaw
 from oracle.motion import CLOSED
 
-KNOB_GRIP = 0.012  # how far below the top of the stove knob's ridge the fingers close on it
-# how far the hand turns the knob (radians): past LIBERO's 0.5 with the fingers' slip (ours 1.06, LIBERO's 1.18:
-# docs/LIBERO.md), short of its 2.1 stop; how fast (rad/s): faster, the knob's friction slips the fingers off
-KNOB_TURN, KNOB_SPEED = 1.3, 0.3
-# where the hand lines up in front of a drawer's handle; how far it pulls it (the drawer stops at 16 cm)
-HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
 RETREAT = 0.1  # how far the hand rises from where it let go
 REACH_STEP = 0.01  # how far at a time a release point out of reach moves toward the robot
-# laying a bottle along a sloping shelf (`_lay`): how far over the shelf its side is let go; how far
-# downhill of where it lies the hand starts, and over it; how far off the shelf the hand turns it (in
-# LAY_STEPS), and comes nearer; the steps it waits once let go; how far out of the shelf it backs off
-LAY_GAP, LAY_START, LAY_ABOVE, LAY_OVER, LAY_NEAR = 0.025, 0.05, 0.05, 0.06, 0.04
-LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
 SWIFT_LIFT = 0.15  # the highest lift made as one time-optimal joint move
 # how far at a time, and how many times, a held object slides out from under something; how far clear of it
 UNDER_STEP, UNDER_STEPS, UNDER_MARGIN = 0.03, 5, 0.01
@@ -36,9 +27,9 @@ UNDER_STEP, UNDER_STEPS, UNDER_MARGIN = 0.03, 5, 0.01
 DISH_WALL, DISH_SET_BACK, DISH_FLOOR = 0.023, 0.02, -0.003
 
 
-class Skills(Clearance):
-    """grasp, lift, place (or lay along a sloping shelf), push, and the fixtures' motions (turn a
-    knob, pull a drawer open), over the scene of one episode."""
+class Skills(FurnitureSkills):
+    """grasp, lift, place (or lay along a sloping shelf), push, and the furniture's motions (turn a
+    knob, pull a drawer open: oracle/furniture.py), over the scene of one episode."""
 
     def open(self, steps: int = 6) -> None:
         self.held, self.gentle = None, False
@@ -59,7 +50,7 @@ class Skills(Clearance):
         top = contact.top(kind, pos)
         point = contact.grasp_point(kind, pos)
         axis = self.scene.object_yaw(object_id) + (0.0 if kind.grasp_axis == "x" else np.pi / 2)
-        if onto is not None and "tilt" in self._kind(onto).params:
+        if onto is not None and self._kind(onto).shelf is not None:
             x = self._shelf_axes(onto)[:, 0]
             axis = float(np.arctan2(x[1], x[0])) + np.pi / 2
         if kind.rim:  # fingers across the wall, closing along its radius
@@ -73,7 +64,7 @@ class Skills(Clearance):
             self.move_to(point, yaw)
         self.close()
         self.held = (object_id, contact.grip_height(kind))
-        self.gentle = bool(kind.params.get("neck"))  # held by a narrow neck, a bottle swings: carried gently
+        self.gentle = kind.neck  # held by a narrow neck, a bottle swings: carried gently
 
     def lift(self, height: float = 0.15) -> None:
         """Raise the hand straight up by `height`; what it holds first slides toward the robot out
@@ -109,7 +100,7 @@ class Skills(Clearance):
         standing beside the way."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
-        if "tilt" in self._kind(destination_id).params:
+        if self._kind(destination_id).shelf is not None:
             self._lay(destination_id)
             return
         over = self._drop_point(destination_id)
@@ -139,34 +130,6 @@ class Skills(Clearance):
             self.move_to(down)
         self.open()
         self.move_to([over[0], over[1], release_z + RETREAT])
-
-    def _shelf_axes(self, shelf_id: str) -> np.ndarray:
-        """A sloping shelf's site axes in the world (columns): along the shelf, out of it (negated),
-        up its slope."""
-        return self.scene.body_pose(shelf_id)[1] @ turned(np.array([1.0, 0.0, 0.0]), self._kind(shelf_id).params["tilt"])
-
-    def _lay(self, shelf_id: str) -> None:
-        """Lay the held object along a sloping shelf (the wine rack's), its top uphill: over the
-        shelf, turn the hand with it down toward the slope, come down to LAY_GAP over the shelf, let
-        go, and back off out of it."""
-        axes, grip = self._shelf_axes(shelf_id), self.held[1]
-        up, out = axes[:, 2], -axes[:, 1]
-        along, rise = self._kind(shelf_id).params["lay"]
-        radius = min(self._kind(self.held[0]).size[:2]) / 2
-        bottom = self.scene.object_pos(shelf_id) + along * axes[:, 0] + rise * up + (radius + LAY_GAP) * out
-        downhill = -np.append(up[:2] / np.linalg.norm(up[:2]), 0.0)
-        self.move_to(bottom + LAY_START * downhill + [0.0, 0.0, max(self.scene.ee_pos()[2] - bottom[2], grip + LAY_ABOVE)])
-        pivot = np.cross([0.0, 0.0, 1.0], up)
-        angle, upright = float(np.arccos(up[2])), yaw_matrix(self.yaw) @ DOWN
-        for k in range(1, LAY_STEPS + 1):  # turned a step at a time, kept over the shelf as it turns
-            turn = turned(pivot / np.linalg.norm(pivot), angle * k / LAY_STEPS)
-            self.facing = turn @ upright
-            self.move_to(bottom + grip * turn[:, 2] + (LAY_OVER * (1 - k / LAY_STEPS) + LAY_NEAR) * out)
-        self.move_linear(bottom + grip * up, speed=0.05)
-        self.open()
-        self.hold(LAY_SETTLE)
-        self.move_linear(self.scene.ee_pos() + LAY_BACK * out, speed=0.05)
-        self.facing = None
 
     def _within_reach(self, over: np.ndarray, height: float, destination_id: str) -> np.ndarray:
         """`over`, or where the hand cannot reach that high there (a tall bottle carried over the
@@ -249,56 +212,6 @@ class Skills(Clearance):
     def _footprint_gap(self, object_id: str, xy: np.ndarray) -> float:
         """How far the point `xy` is from the object's footprint (its resting extents, turned as it stands)."""
         yaw = self.scene.object_yaw(object_id)
-        local = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]]) @ (xy - self.scene.object_pos(object_id)[:2])
+        local = yaw_matrix(yaw)[:2, :2].T.copy() @ (xy - self.scene.object_pos(object_id)[:2])
         outside = np.maximum(np.abs(local) - np.asarray(self._kind(object_id).size[:2]) / 2, 0.0)
         return float(np.linalg.norm(outside))
-
-    def turn_on(self, knob_id: str) -> None:
-        """Take the knob's ridge from above, fingers across it, and turn the hand KNOB_TURN about
-        the knob's axis (the way its joint turns on)."""
-        axis, rot = self.scene.body_pose(knob_id)
-        ridge = np.append(rot[:2, 1], 0.0)  # the ridge lies along the knob's y
-        top = self.scene.surface_below(axis[:2], axis[2] + 0.3)
-        yaw = grasp_yaw(float(np.arctan2(-ridge[0], ridge[1])))  # fingers closing across the ridge
-        grip = np.array([axis[0], axis[1], top - KNOB_GRIP])
-        self.move_to(grip + [0.0, 0.0, 0.07], yaw)
-        self.move_to(grip, yaw)
-        self.close()
-        self.twist(yaw + KNOB_TURN, KNOB_SPEED)
-        self.hold(5)
-        self.q = self.scene.data.qpos[self.scene.arm_qpos].copy()  # where the knob let the hand go: let go there
-        self.open()
-        self.move_to(grip + [0.0, 0.0, 0.1])
-
-    def _drop_point(self, destination_id: str) -> np.ndarray:
-        """Where over a destination a carried thing is let down: the centre of its top, or of an
-        open drawer's uncovered part (between the cabinet's front and the drawer's)."""
-        kind, top = self._kind(destination_id), self.top_of(destination_id)
-        if "pull" not in kind.params:
-            return top
-        out = self._pull_direction(destination_id)
-        travel = float((self.scene.object_pos(destination_id) - np.asarray(self.spec.object(destination_id).pos)) @ out)
-        mouth, front = kind.params["opening"]
-        return top + (mouth + front - travel) / 2 * out
-
-    def _pull_direction(self, drawer_id: str) -> np.ndarray:
-        """The way a drawer slides out, in the world."""
-        return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._kind(drawer_id).params["pull"])
-
-    def pull_open(self, drawer_id: str, travel: float = DRAWER_PULL) -> None:
-        """Take the drawer's handle bar from the front, the hand level and its fingers closing up and
-        down on the bar, and pull it `travel` out along its slide; let go and back off, up and out."""
-        kind = self._kind(drawer_id)
-        site, rot = self.scene.object_pos(drawer_id), self.scene.body_pose(drawer_id)[1]
-        handle = site + rot @ np.asarray(kind.params["handle"])
-        out = self._pull_direction(drawer_id)
-        self.move_to([*self.scene.ee_pos()[:2], max(self.scene.ee_pos()[2], self.clearance())])
-        self.facing = facing(tuple(-out[:2]), kind.params["roll"])
-        self.move_to(handle + HANDLE_REACH * out)
-        self._settle(self.q)
-        self.move_linear(handle, speed=0.15)
-        self.close()
-        self.move_linear(handle + travel * out, speed=0.15)
-        self.open()
-        self.move_linear(self.scene.ee_pos() + 0.04 * out + [0.0, 0.0, 0.06], speed=0.2)
-        self.facing = None  # the next move turns the hand down again

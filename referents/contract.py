@@ -22,8 +22,8 @@ from types import ModuleType
 
 import numpy as np
 
-from core import worlds
-from core.demo import DemoScript, Skills
+from core import programs, worlds
+from core.demo import DemoScript
 from core.libero import Problem
 from core.spec import EpisodeSpec, TaskSpec
 from referents import destination
@@ -31,18 +31,6 @@ from referents.balance import Balance
 from referents.design import Design
 from referents.features import Alternative, object_alternatives
 from referents.schema import CONFOUNDS, ReferentConfig, ReferentSpecError
-
-
-def pick_and_lift(skills: Skills, spec: EpisodeSpec) -> None:
-    """Grasp the target and lift it; where the world carries it somewhere (a container, see
-    referents/destination.py), lift it less and put it there."""
-    skills.grasp(spec.target)
-    destination = spec.task.params.get("destination")
-    if destination is None:
-        skills.lift()
-        return
-    skills.lift(0.1)
-    skills.place(destination)
 
 
 def _the_target(spec: EpisodeSpec) -> str:
@@ -76,7 +64,7 @@ class TypeModule:
     # target, template, counterfactuals), each through `balance.pick` (least used, seeded ties)
     design: Callable[[ReferentConfig, Balance], Design]
     # `demo(skills, spec)`: the oracle's plan, a few lines over the skills of core/demo.py
-    demo: DemoScript = pick_and_lift
+    demo: DemoScript = programs.perform
     # `alternatives(config, spec) -> [Alternative]`: what the instruction chooses among, for the confound
     # audit, each with the features that declare their family (referents/features.py)
     alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives

@@ -7,7 +7,6 @@ swap counterfactual names the other destination (its whole phrase, e.g. "on the 
 
 from __future__ import annotations
 
-from core.demo import Skills
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from referents.balance import Balance
 from referents.compose import slug
@@ -54,12 +53,6 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
         counterfactuals=(Counterfactual(say(other), placements[1].id, (_phrase(cfg, goal), _phrase(cfg, other))),),
         task=TaskSpec(program="place", params={"object": placements[2].id}),
     )
-
-
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.grasp(spec.task.params["object"])
-    skills.lift(0.1)
-    skills.place(spec.target)
 
 
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:

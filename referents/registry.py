@@ -26,14 +26,14 @@ from core.demo import DemoScript, Skills
 from core.spec import EpisodeSpec
 from referents import destination
 from referents.balance import Balance
-from referents.contract import TypeModule, code_of, pick_and_lift
+from referents.contract import TypeModule, code_of
 from referents.design import Design
 from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
 
 __all__ = [
     "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "carried_by", "demo_of", "load", "of_world", "own_name",
-    "pick_and_lift", "spec_file", "types", "world_of", "worlds_of",
+    "spec_file", "types", "world_of", "worlds_of",
 ]  # fmt: skip
 
 HERE = Path(__file__).parent

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from core import catalog, worlds
+from core import catalog, programs, worlds
 from core.spec import TaskSpec
 
 # The shortcuts `confound=` may re-introduce, for comparisons: `position` puts every target in its
@@ -180,6 +180,8 @@ class ReferentConfig:
         well_typed = isinstance(task.program, str) and margin_ok and isinstance(task.params, dict)
         if not well_typed:
             raise fail("task", "program must be a word, lift_margin a number, params a mapping")
+        if task.program not in programs.PROGRAMS:
+            raise fail("task", f"unknown program {task.program!r}; known: {', '.join(programs.PROGRAMS)}")
         confound = data.pop("confound", None)
         if confound is not None and confound not in CONFOUNDS:
             raise fail("confound", f"unknown confound {confound!r}; known: {', '.join(CONFOUNDS)}")

@@ -7,7 +7,7 @@ are the programs, with object- and position-dependent variables attached to each
 
 from __future__ import annotations
 
-from core.demo import Skills
+from core import programs
 from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from referents.balance import Balance
 from referents.compose import choose_scene
@@ -18,9 +18,10 @@ from referents.schema import ReferentConfig
 
 def validate(cfg: ReferentConfig) -> None:
     verbs = cfg.need("verbs", dict)
-    unknown = set(verbs) - {"pick", "push"}
+    alone = [n for n, p in programs.PROGRAMS.items() if p.lands and not p.needs]  # on the named object, nothing else
+    unknown = set(verbs) - set(alone)
     if len(verbs) < 2 or unknown:
-        raise cfg.fail("verbs", f"needs two or more of the programs pick, push; unknown: {sorted(unknown)}")
+        raise cfg.fail("verbs", f"needs two or more of the programs {', '.join(alone)}; unknown: {sorted(unknown)}")
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
@@ -43,14 +44,6 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
         ),
         task=TaskSpec(program=program, lift_margin=cfg.task.lift_margin),
     )
-
-
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    if spec.task.program == "push":
-        skills.push(spec.target)
-    else:
-        skills.grasp(spec.target)
-        skills.lift()
 
 
 def answer(spec: EpisodeSpec) -> str:

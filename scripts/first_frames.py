@@ -13,9 +13,6 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-
 from jobs.cli import UserError, main  # noqa: E402
 
 LABEL_HEIGHT = 44  # pixels under each frame for the type, its world and the instruction

@@ -22,8 +22,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
 
 # (world, task, state, camera, thing): the worst object or fixture of each world at LIBERO's states
 # (the picture tests' figures), in the camera where it was worst

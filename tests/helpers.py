@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from core import libero
+from core import libero, programs
 from core.exam import FACES, Exam, read
 from core.profiles import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
@@ -270,9 +270,10 @@ def liberos_replay(dataset: Path, world: World) -> dict:
             "fingers": scene["robot"]["fingers"],
             "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
         }
-        if task["program"] in libero.GOALS:  # a motion of LIBERO-Goal's (a drawer, the knob, a push)
+        own = programs.named(task["program"]).libero
+        if own is not None:  # a motion of LIBERO-Goal's (a drawer, the knob, a push)
             place = libero.place_name(world.kind(kinds[goal]), instance[goal])
-            episode["goal"] = libero.goal(task["program"], place, instance[moved] if moved else None)
+            episode["goal"] = libero.goal(own, place, instance[moved] if moved else None)
         elif moved is None and "destination" not in params:  # pick, push: LIBERO has none; judged by positions
             episode["goal"] = ["Up", instance[goal]]
         episodes.append(episode)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from core.catalog import Kind
+from core.rotations import quat_matrix
 
 PHYSICS_DT = 0.002  # simulation timestep, seconds; control periods are whole multiples of it
 MAX_IMAGE_SIZE = 1024  # largest square frame a renderer may ask for
@@ -62,14 +63,7 @@ class Camera:
             return np.stack([x, np.cross(z, x), z], axis=1)
         if self.quat is None:
             raise ValueError("a camera needs a quat or a lookat")
-        w, x, y, z = self.quat
-        return np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        return quat_matrix(self.quat)
 
     def project(self, points: np.ndarray, size: int, mirrored: bool = False) -> np.ndarray:
         """World points (n, 3) -> where they appear in this camera's upright square frame of

@@ -37,9 +37,10 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from core import exam, libero, profiles, worlds
+from core import exam, libero, profiles, programs, worlds
 from core.profiles import STATE_KEY, TASK_KEY
-from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings, yaw_of
+from core.rotations import yaw_of
+from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings
 from gen.config import check_seed
 from gen.planning.audit import audit
 from gen.products.exam import take_hint
@@ -182,8 +183,8 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
         return f"our skills cannot do it ({goal}: docs/LIBERO.md says which tasks each world covers)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
-    pushed = design.task is not None and design.task.program == "push_to"  # slid along the table, never held
-    if not carried_kind.is_site and not pushed and not carried_kind.graspable():
+    held = design.task is None or programs.named(design.task.program).held  # not slid along the table
+    if held and not carried_kind.is_site and not carried_kind.graspable():
         return f"its {carried_kind.name} is wider than the Panda's fingers open"
     if not len(libero.initial_states(suite, task)):
         return "its initial-state file is empty"

@@ -119,7 +119,7 @@ def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, s
         contact_sheet(root, root / PREVIEW_PATH)
         seconds = time.perf_counter() - started
         summary = DatasetSummary(out, len(rows), frames, failed, seconds, verdict(audited))
-        contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.recording.layout)
+        contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.recording.interface)
         card.write(root, audited, provenance, contents)
         faults.point("finalize")
         write_generation(root, provenance, summary.episodes, failed, seconds)
@@ -160,7 +160,7 @@ def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) ->
     """The LeRobot files, from the episode files, in order."""
     from gen.lerobot.writer import LeRobotWriter, Recording
 
-    sim, features = planned.recording, planned.recording.layout
+    sim, features = planned.recording, planned.recording.interface
     writer = LeRobotWriter(
         root, Recording(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
     )

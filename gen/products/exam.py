@@ -105,7 +105,7 @@ def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
     """Which object each pixel of the agentview frame a rollout first sees shows (the scene as
     its rollouts start, after the profile's settle steps): what a predicted point is judged by."""
     ids = [o.id for o in spec.objects]
-    return exam.encode_objects(cameras.object_indices(spec.sim.layout.agentview, ids))
+    return exam.encode_objects(cameras.object_indices(spec.sim.interface.agentview, ids))
 
 
 def switch_rows(
@@ -124,7 +124,7 @@ def switch_rows(
     choices = exam.switch_choices(trial, spec, switches)
     if not choices:
         return (), "no alternative to switch to (the instruction names the only candidate)"
-    settle = spec.sim.layout.settle_steps
+    settle = spec.sim.interface.settle_steps
     demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), settle)
     if not demo.success:
         return (), f"the oracle does not finish the original ask from this state ({demo.failure})"
@@ -164,7 +164,7 @@ def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:
 
 def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
     share = planned.only
-    sim, features = share.sim, share.sim.layout
+    sim, features = share.sim, share.sim.interface
     return {
         "referent": share.referent.name,
         "seed": cfg.seed,

@@ -86,7 +86,7 @@ class Producer:
         spec, actions = demo.spec, demo.actions
         size = self.sim.image_size
         frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.sim.cameras}
-        states = np.empty((len(actions), self.sim.layout.state_size), np.float32)
+        states = np.empty((len(actions), self.sim.interface.state_size), np.float32)
         self.scene.reset(spec)  # colours and body assignment; the states below carry the rest
         for t, physics in enumerate(demo.states):
             self.scene.set_physics_state(physics)

@@ -48,7 +48,7 @@ def contact_sheet(root: Path, out: Path, n: int = 16, camera: str | None = None,
     records = scenes.read(root).head(n)
     specs = [EpisodeSpec.from_json(s) for s in records["spec"]]
     episodes = list(records["episode_index"])
-    features = specs[0].sim.layout
+    features = specs[0].sim.interface
     camera = camera or features.camera_names[0]
     if camera not in features.cameras:
         raise ValueError(f"camera must be one of {', '.join(features.camera_names)} (profile {features.name}), got {camera!r}")

@@ -13,9 +13,12 @@ import pytest
 
 from core import libero
 from core.profiles import LIBERO
+from core.programs import achieved, named
 from core.spec import EpisodeSpec, SceneObject, SimSettings, TaskSpec
-from core.success import OPEN_TRAVEL, TURN_ON, Outcome, achieved
+from core.success import Outcome
 
+OPEN_TRAVEL = libero.KINDS["top_drawer"].drawer.open_travel  # LIBERO's thresholds, as the pieces own them
+TURN_ON = libero.KINDS["stove_knob"].knob.turn_on
 DRAWER = (0.0267, -0.2513, 1.0906)  # the top drawer's region site, closed
 KNOB_AXIS = np.array([-0.41, 0.21, 0.905])
 FRONT = (-0.05, 0.21, 0.895)  # the table's region in front of the stove
@@ -106,15 +109,15 @@ def test_the_bottle_is_on_the_rack_when_its_origin_is_in_the_tilted_box(up: floa
 
 def test_liberos_goal_of_each_motion_names_liberos_own_things() -> None:
     kinds = {k: libero.KINDS[k] for k in ("top_drawer", "stove_knob", "stove_front")}
-    assert libero.goal("open", libero.place_name(kinds["top_drawer"], "wooden_cabinet_1_top_region")) == [
+    assert libero.goal(named("open").libero, libero.place_name(kinds["top_drawer"], "wooden_cabinet_1_top_region")) == [
         "Open",
         "wooden_cabinet_1_top_region",
     ]
-    assert libero.goal("turn_on", libero.place_name(kinds["stove_knob"], kinds["stove_knob"].anchor)) == [
+    assert libero.goal(named("turn_on").libero, libero.place_name(kinds["stove_knob"], kinds["stove_knob"].anchor)) == [
         "Turnon",
         "flat_stove_1",
     ]
-    assert libero.goal("push_to", libero.place_name(kinds["stove_front"], "x"), "plate_1") == [
+    assert libero.goal(named("push_to").libero, libero.place_name(kinds["stove_front"], "x"), "plate_1") == [
         "On",
         "plate_1",
         "main_table_stove_front_region",

@@ -17,8 +17,9 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset  # before any GL c
 
 from core import contact, libero, worlds
 from core.exam import read
+from core.programs import succeeded
 from core.spec import FAST, LOOKS, EpisodeSpec
-from core.success import Outcome, succeeded
+from core.success import Outcome
 from eval.battery import take
 from eval.registry import make
 from gen.planning.plan import default_sim, plan

@@ -21,7 +21,8 @@ from core import libero, worlds
 from core.exam import read
 from core.products import ROLLOUTS
 from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
-from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec, yaw_quat
+from core.rotations import yaw_quat
+from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec
 from core.success import Outcome, contained
 from eval.battery import take
 from eval.registry import make

@@ -15,8 +15,9 @@ import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core import parquet
+from core.programs import succeeded
 from core.spec import EpisodeSpec
-from core.success import Outcome, succeeded
+from core.success import Outcome
 from gen.products import scenes
 from helpers import make_dataset
 from oracle.scene import scene_for

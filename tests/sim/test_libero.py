@@ -15,8 +15,8 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core.exam import read
 from core.profiles import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
+from core.programs import succeeded
 from core.spec import EpisodeSpec, SimSettings
-from core.success import succeeded
 from eval.battery import take
 from eval.env import ExamEnv
 from eval.registry import make

@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from core import success, worlds
+from core import programs, worlds
 from core.exam import PUBLIC_COLUMNS, SWITCH, read
 from gen.config import GenConfig
 from gen.planning.plan import default_sim, plan
@@ -147,7 +147,7 @@ def test_gen_help_explains_every_option() -> None:
 
 def test_the_exam_format_doc_has_every_program_and_every_worlds_frame() -> None:
     predicates = doc_section("Success predicates")
-    assert all(f"`{program}`" in predicates for program in success.PREDICATES), predicates
+    assert all(f"`{program}`" in predicates for program in programs.PROGRAMS), predicates
     frames = doc_section("World frame")
     rows = {m[1]: m[2] for m in re.finditer(r"^\| `(\w+)` \| (.*) \|$", frames, re.M)}
     for name in worlds.names():

@@ -11,13 +11,15 @@ import numpy as np
 import pytest
 
 from core import parquet
+from core.programs import succeeded
+from core.rotations import yaw_matrix
 from core.spec import EpisodeSpec, SimSettings
-from core.success import lifted, succeeded
+from core.success import lifted
 from gen.planning.plan import designs, plan, realize
 from gen.products import scenes
 from gen.products.produce import Producer
 from oracle.episode import demonstrate, replay
-from oracle.ik import DOWN, ArmIK, yaw_matrix
+from oracle.ik import DOWN, ArmIK
 from oracle.scene import EE_SITE, Scene, scene_for
 from oracle.skills import Skills
 from referents import registry

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from core import worlds
+from core.programs import succeeded
 from core.spec import EpisodeSpec
-from core.success import succeeded
 from gen.planning.audit import audit
 from gen.planning.plan import default_sim, plan
 from helpers import visible_bodies
@@ -89,7 +89,7 @@ def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
         for obj in spec.objects:
             bodies = {int(scene.model.geom_bodyid[g]) for g in scene.placed[obj.id].geom_ids}
             assert sum(visible.get(b, 0) for b in bodies) >= 8, f"{name}: {obj.id} not visible"
-        still = np.tile(sim.layout.hold_action(sim.robot_home), (30, 1))
+        still = np.tile(sim.interface.hold_action(sim.robot_home), (30, 1))
         outcome = replay(scene, spec, still)
         assert not succeeded(spec, outcome)
         for cf in spec.counterfactuals:
@@ -97,7 +97,7 @@ def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
 
 
 def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
-    from core.success import achieved
+    from core.programs import achieved
 
     return achieved(spec, outcome, *spec.choice(cf))
 

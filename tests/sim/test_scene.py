@@ -94,7 +94,7 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
         labels = cams.labels()[camera]
         cams.close()
         objects = [o for o in spec.objects if o.id in scene.placed]
-        pixels = worlds.world(sim.world).agentview.project(np.array([o.pos for o in objects]), 128, sim.layout.mirrored)
+        pixels = worlds.world(sim.world).agentview.project(np.array([o.pos for o in objects]), 128, sim.interface.mirrored)
         for obj, (column, row) in zip(objects, pixels):
             near = labels[int(row) - 2 : int(row) + 3, int(column) - 2 : int(column) + 3]
             assert (near == scene.model.body(scene.placed[obj.id].body_id).name.removesuffix("_main")).any(), obj.id

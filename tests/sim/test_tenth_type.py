@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import yaml
 
-from core import parquet
+from core import parquet, programs
 from core.spec import SimSettings
 from gen.planning.plan import designs, plan
 from gen.products import scenes
@@ -71,7 +71,7 @@ def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Pa
     assert {s.referent for s in specs} == {"size"} and "size" not in registry.available()
     assert {s.object(s.target).attributes["size"] for s in specs} == {"small", "big"}
     assert ref.assets() == (("block_large", 1), ("block_small", 1))
-    assert registry.demo_of("size", path) is registry.pick_and_lift
+    assert registry.demo_of("size", path) is programs.perform
     with pytest.raises(registry.UnknownReferent, match="needs that file's path"):
         registry.demo_of("size")
 

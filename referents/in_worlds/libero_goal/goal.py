@@ -17,10 +17,9 @@ from itertools import combinations
 
 import numpy as np
 
-from core import libero, worlds
-from core.demo import Skills
+from core import libero, programs, worlds
+from core.furniture import Spot
 from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
-from core.success import PREDICATES
 from referents import scenery
 from referents.balance import Balance
 from referents.compose import slug
@@ -29,10 +28,6 @@ from referents.features import IDENTITY, POSITION, Alternative, Feature, object_
 from referents.schema import Candidate, ReferentConfig
 
 CONFOUNDS = ("position", "layout")
-# how far a drawer a thing goes in is pulled (m): 12 cm of it then lie uncovered; wide open, its
-# front would stand over what stands before the cabinet, the bowl to be put in it
-_DRAWER_SLOT = 0.13
-_DRAWER_LIFT = 0.22  # how high a thing for a drawer is lifted: over the drawer's sides, so no later rise shakes it loose
 
 
 def _goals(cfg: ReferentConfig) -> dict[str, list[str]]:
@@ -128,14 +123,15 @@ def validate(cfg: ReferentConfig) -> None:
         raise cfg.fail("phrases", "needs the words for every place in goals")
     motions = cfg.extra.get("motions", {})
     if not isinstance(motions, dict) or any(
-        p not in PREDICATES
+        p not in programs.PROGRAMS
         or not isinstance(m, dict)
         or not isinstance(m.get("say"), str)
         or not isinstance(m.get("places"), list)
         or not {str(d) for d in m["places"]} <= names
         for p, m in motions.items()
     ):
-        raise cfg.fail("motions", f"maps programs ({', '.join(PREDICATES)}) to their places (names of objects) and words (say)")
+        known = ", ".join(programs.PROGRAMS)
+        raise cfg.fail("motions", f"maps programs ({known}) to their places (names of objects) and words (say)")
     if not _tasks(cfg):
         raise cfg.fail("targets" if cfg.targets else "distractor_only", "leaves no place any object may be asked to go")
     world = worlds.world(cfg.world)
@@ -198,23 +194,6 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     )
 
 
-def demo(skills: Skills, spec: EpisodeSpec) -> None:
-    """The task's program: a motion on the furniture, or carrying (after opening the drawer it goes in)."""
-    program, place = spec.task.program, spec.target
-    if program == "open":
-        skills.pull_open(place)
-    elif program == "turn_on":
-        skills.turn_on(place)
-    elif program == "push_to":
-        skills.push_to(spec.task.params["object"], place)
-    else:
-        if program == "place_in":
-            skills.pull_open(place, _DRAWER_SLOT)
-        skills.grasp(spec.task.params["object"], onto=place)
-        skills.lift(_DRAWER_LIFT if program == "place_in" else 0.1)
-        skills.place(place)
-
-
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     moved = spec.task.params.get("object")
     carried = spec.object(moved) if moved else None
@@ -237,6 +216,11 @@ def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:
     return [(c.kind, 1) for c in cfg.objects]
 
 
+def _spot_names(spot: Spot | None) -> tuple[str, ...]:
+    """The names LIBERO's goals may give a place on the furniture: its site's, its `goal_name`."""
+    return tuple(n for n in (spot.site, spot.goal_name) if n) if spot else ()
+
+
 def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Candidate | None:
     """The place a BDDL name means: an object of the problem, or a place on the furniture (a fixture's
     site, or the name LIBERO's goals give a point of it: `goal_name`)."""
@@ -247,15 +231,10 @@ def _destination(cfg: ReferentConfig, problem: libero.Problem, name: str) -> Can
         (
             c
             for c in cfg.role("destination") + cfg.role("object")
-            if c.kind == base or name in (world.kind(c.kind).params.get("site"), world.kind(c.kind).params.get("goal_name"))
+            if c.kind == base or name in _spot_names(world.kind(c.kind).spot)
         ),
         None,
     )
-
-
-# LIBERO's goal predicates and the programs that do them: `On` a place on the table is pushing there,
-# `In` a drawer is putting the object inside it, `On` anything else is carrying (the spec's program)
-_LIBEROS = {"open": "open", "turnon": "turn_on", "in": "place_in"}
 
 
 def _task(cfg: ReferentConfig, problem: libero.Problem) -> tuple[str, str, str] | None:
@@ -268,11 +247,17 @@ def _task(cfg: ReferentConfig, problem: libero.Problem) -> tuple[str, str, str] 
     carried = scenery.candidate(cfg, moved).name if moved is not None else ""
     if place is None or (len(args) == 2 and not carried):
         return None
-    program = _LIBEROS.get(predicate.lower(), cfg.task.program)
-    if program == cfg.task.program and "push_to" in _motions(cfg) and place.name in _motions(cfg)["push_to"]["places"]:
-        program = "push_to"
-    task = (program, carried, place.name)
+    task = (_program(cfg, predicate, place.name), carried, place.name)
     return task if task in _tasks(cfg, displaced=False) else None
+
+
+def _program(cfg: ReferentConfig, predicate: str, place: str) -> str:
+    """The program doing LIBERO's goal `predicate` at `place`: the motion whose LIBERO predicate it
+    is, at one of its places (`Open` a drawer, `On` the table before the stove is pushing there),
+    else carrying (the spec's program)."""
+    said = predicate.lower()
+    doing = [p for p, m in _motions(cfg).items() if (programs.named(p).libero or "").lower() == said and place in m["places"]]
+    return doing[0] if doing else cfg.task.program
 
 
 def _as_liberos_task(cfg: ReferentConfig, balance: Balance) -> Design:

@@ -1,0 +1,80 @@
+"""The furniture a place belongs to, typed: where on a fixture the place is (`Spot`), and the piece
+it is a part of, each owning the thresholds LIBERO judges it by (as LIBERO's articulated objects
+own their open and turn-on ranges): a cabinet's `Drawer`, the stove's `Knob`, the wine rack's
+sloping `Shelf`. A kind (core/catalog.py) carries them as typed fields, so the success predicates
+(core/success.py) and the skills (oracle/skills.py) read them by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Spot:
+    """Where a place on a fixture is, which no scene moves: LIBERO's region site `site`, or the point
+    `offset` in the frame of the body `body`, carried along as the body moves (a knob); `goal_name`
+    is LIBERO's name of it in its goals where that is not the site's (the stove, for its knob)."""
+
+    site: str = ""
+    body: str = ""
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    goal_name: str = ""
+
+    @property
+    def anchor(self) -> str:
+        """Where it is, as another simulator is asked to follow it: its site's name, or
+        `<body>@<x>,<y>,<z>` (eval/libero_server.py reads both)."""
+        return self.site or f"{self.body}@{','.join(map(str, self.offset))}"
+
+
+@dataclass(frozen=True)
+class Drawer:
+    """A cabinet drawer, its place the region site inside it: its handle bar `handle` from the site
+    (the drawer's own frame, as `pull`, the way it slides out); `roll`, how far the hand taking it
+    turns from closing straight up and down; `opening`, how far out from the closed drawer's site
+    the cabinet's top ends and the inner face of its front lie (the uncovered part, open, is between).
+    Open once it slid `open_travel` out: LIBERO's wooden cabinet, its joint below -0.14 m."""
+
+    handle: tuple[float, float, float]
+    opening: tuple[float, float]
+    pull: tuple[float, float, float] = (0.0, -1.0, 0.0)
+    roll: float = 0.0
+    open_travel: float = 0.14
+
+    def opened(self, start: tuple[float, ...], end: tuple[float, ...]) -> bool:
+        return float(np.linalg.norm(np.subtract(end, start))) >= self.open_travel
+
+
+@dataclass(frozen=True)
+class Knob:
+    """A stove's knob, its place a point `radius` from its axis (Spot.offset). On from `turn_on`
+    radians: LIBERO's flat stove (it starts at 0 and turns one way only)."""
+
+    radius: float
+    turn_on: float = 0.5
+
+    def on(self, start: tuple[float, ...], end: tuple[float, ...]) -> bool:
+        """A point `radius` from the axis, turned by an angle a, moves 2 radius sin(a / 2): the chord."""
+        chord = float(np.linalg.norm(np.subtract(end, start)))
+        return chord >= 2 * self.radius * np.sin(self.turn_on / 2)
+
+
+@dataclass(frozen=True)
+class Shelf:
+    """A sloping shelf (the wine rack's top), LIBERO's region site on it of half size `half`, turned
+    `tilt` about its x. On it is a thing's origin in the site's box, up to `rise` over its face
+    (LIBERO's `under`); a bottle is laid along it, its bottom `lay` from the site (along the site's
+    x, and up the slope: oracle/skills.py `_lay`)."""
+
+    half: tuple[float, float, float]
+    tilt: float
+    lay: tuple[float, float]
+    rise: float = 0.10
+
+    def holds(self, delta: np.ndarray) -> bool:
+        """Whether a thing `delta` from the site (in the site's frame, as LIBERO multiplies it) is on it."""
+        half = np.asarray(self.half)
+        return bool(np.all(np.abs(delta[:2]) < half[:2]) and half[2] < delta[2] < half[2] + self.rise)

@@ -1,0 +1,148 @@
+"""Motor programs, one record each: what an instruction asks the hand to do to what it names.
+
+A program's record is everything the project knows of it: what the instruction's target is (the
+thing moved, the place something is brought to, or the part of a piece of furniture a motion
+moves), which task parameters it reads, whether the hand carries what it moves, how our scorer
+judges it (core/success.py), the LIBERO goal predicate it is, and its demonstration over the
+skills (core/demo.py). Every other module reads the record (`named`); none branches on a name.
+A program of two goals (LIBERO-10's "put both ...", "... and close it") is one more record: its
+`judge` both predicates, its `perform` both skills in turn.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from core import success
+from core.demo import Skills
+from core.spec import EpisodeSpec
+from core.success import Outcome
+
+Predicate = Callable[[EpisodeSpec, Outcome, str], bool]  # (spec, outcome, target) -> done
+Names = Literal["moved", "place", "part"]
+
+# putting a thing in a drawer: how far the drawer is pulled (m: 12 cm of it then lie uncovered;
+# wide open, its front would stand over what stands before the cabinet, the bowl to be put in it),
+# and how high the thing is lifted (over the drawer's sides, so no later rise shakes it loose)
+DRAWER_SLOT, DRAWER_LIFT = 0.13, 0.22
+CARRY_LIFT = 0.1  # how high a thing carried somewhere is lifted before the hand carries it
+
+
+@dataclass(frozen=True)
+class Program:
+    """One motor program. `names`: what the instruction's target is — `moved`, the thing the
+    program moves (a grocery picked up); `place`, where it brings `params.object` (a plate, a
+    drawer); `part`, the part of a piece of furniture the motion moves (a drawer, the stove's knob).
+    `needs`: the task parameters it reads (`object`: what is brought; `destination`: where the
+    target goes). `held`: the hand carries what it moves (not slid along the table, not a part of
+    the furniture). `libero`: LIBERO's goal predicate where the program is one of its own; None
+    where it follows where the thing goes (`In` a container's region, `On` anything else) or LIBERO
+    has none."""
+
+    name: str
+    names: Names
+    judge: Predicate
+    perform: Callable[[Skills, EpisodeSpec], None]
+    needs: tuple[str, ...] = ()
+    held: bool = True
+    libero: str | None = None
+
+    def moved(self, spec: EpisodeSpec, target: str) -> str:
+        """The object the program moves when it acts on `target`: what it brings there, else `target`."""
+        return spec.task.params["object"] if "object" in self.needs else target
+
+    @property
+    def brings(self) -> bool:
+        """The target is where the program brings `params.object`."""
+        return self.names == "place"
+
+    @property
+    def lands(self) -> bool:
+        """The hand lands on what the instruction names (so it could land on any other object instead)."""
+        return self.names == "moved"
+
+
+def _pick(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.grasp(spec.target)
+    skills.lift()
+
+
+def _push(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.push(spec.target)
+
+
+def _carry(skills: Skills, spec: EpisodeSpec) -> None:
+    """Grasp the target and put it where the world carries it (a basket, a plate)."""
+    skills.grasp(spec.target)
+    skills.lift(CARRY_LIFT)
+    skills.place(spec.task.params["destination"])
+
+
+def _place(skills: Skills, spec: EpisodeSpec) -> None:
+    """Bring the object to the named place (across a sloping shelf's slope, to be laid along it)."""
+    skills.grasp(spec.task.params["object"], onto=spec.target)
+    skills.lift(CARRY_LIFT)
+    skills.place(spec.target)
+
+
+def _place_in(skills: Skills, spec: EpisodeSpec) -> None:
+    """Open the drawer part way, then put the object inside."""
+    skills.pull_open(spec.target, DRAWER_SLOT)
+    skills.grasp(spec.task.params["object"], onto=spec.target)
+    skills.lift(DRAWER_LIFT)
+    skills.place(spec.target)
+
+
+def _open(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.pull_open(spec.target)
+
+
+def _turn_on(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.turn_on(spec.target)
+
+
+def _push_to(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.push_to(spec.task.params["object"], spec.target)
+
+
+PROGRAMS: dict[str, Program] = {
+    p.name: p
+    for p in (
+        Program("pick", "moved", success.lifted, _pick),
+        Program("push", "moved", success.pushed, _push, held=False),
+        Program("place", "place", success.placed, _place, ("object",)),
+        Program("pick_place", "moved", success.contained, _carry, ("destination",)),
+        Program("pick_place_on", "moved", success.on, _carry, ("destination",)),
+        Program("open", "part", success.opened, _open, held=False, libero="Open"),
+        Program("turn_on", "part", success.turned_on, _turn_on, held=False, libero="Turnon"),
+        Program("place_in", "place", success.put_in, _place_in, ("object",), libero="In"),
+        Program("push_to", "place", success.pushed_to, _push_to, ("object",), held=False, libero="On"),
+    )
+}
+
+
+class UnknownProgram(ValueError):
+    pass
+
+
+def named(name: str) -> Program:
+    try:
+        return PROGRAMS[name]
+    except KeyError:
+        raise UnknownProgram(f"no motor program {name!r}; known: {', '.join(PROGRAMS)}") from None
+
+
+def perform(skills: Skills, spec: EpisodeSpec) -> None:
+    """The oracle's demonstration of an episode: its program's skill on its target."""
+    named(spec.task.program).perform(skills, spec)
+
+
+def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:
+    """Did the rollout do `program` to `target` (the episode's ask, or a counterfactual's)?"""
+    return named(program).judge(spec, outcome, target)
+
+
+def succeeded(spec: EpisodeSpec, outcome: Outcome) -> bool:
+    return achieved(spec, outcome, *spec.choice())

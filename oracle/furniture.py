@@ -1,0 +1,120 @@
+"""The furniture's skills: pull a drawer open, turn the stove's knob, lay a bottle along a
+sloping shelf, and where over an open drawer a carried thing is let down. Each reads its piece's
+typed kind (core/furniture.py: `Drawer`, `Knob`, `Shelf`); the generic skills (oracle/skills.py)
+build on these.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.furniture import Drawer, Shelf
+from core.rotations import X_AXIS, facing, turned, yaw_matrix
+from oracle.clearance import Clearance
+from oracle.ik import DOWN, grasp_yaw
+
+KNOB_GRIP = 0.012  # how far below the top of the stove knob's ridge the fingers close on it
+# how far the hand turns the knob (radians): past LIBERO's 0.5 with the fingers' slip (ours 1.06, LIBERO's 1.18:
+# docs/LIBERO.md), short of its 2.1 stop; how fast (rad/s): faster, the knob's friction slips the fingers off
+KNOB_TURN, KNOB_SPEED = 1.3, 0.3
+# where the hand lines up in front of a drawer's handle; how far it pulls it (the drawer stops at 16 cm)
+HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
+# laying a bottle along a sloping shelf (`_lay`): how far over the shelf its side is let go; how far
+# downhill of where it lies the hand starts, and over it; how far off the shelf the hand turns it (in
+# LAY_STEPS), and comes nearer; the steps it waits once let go; how far out of the shelf it backs off
+LAY_GAP, LAY_START, LAY_ABOVE, LAY_OVER, LAY_NEAR = 0.025, 0.05, 0.05, 0.06, 0.04
+LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
+
+
+class FurnitureSkills(Clearance):
+    """The motions of the furniture's parts, over the scene of one episode."""
+
+    def _drawer(self, drawer_id: str) -> Drawer:
+        drawer = self._kind(drawer_id).drawer
+        if drawer is None:
+            raise ValueError(f"{self._kind(drawer_id).name} is not a drawer")
+        return drawer
+
+    def _shelf(self, shelf_id: str) -> Shelf:
+        shelf = self._kind(shelf_id).shelf
+        if shelf is None:
+            raise ValueError(f"{self._kind(shelf_id).name} is not a sloping shelf")
+        return shelf
+
+    def _shelf_axes(self, shelf_id: str) -> np.ndarray:
+        """A sloping shelf's site axes in the world (columns): along the shelf, out of it (negated),
+        up its slope."""
+        return self.scene.body_pose(shelf_id)[1] @ turned(X_AXIS, self._shelf(shelf_id).tilt)
+
+    def _lay(self, shelf_id: str) -> None:
+        """Lay the held object along a sloping shelf (the wine rack's), its top uphill: over the
+        shelf, turn the hand with it down toward the slope, come down to LAY_GAP over the shelf, let
+        go, and back off out of it."""
+        axes, grip = self._shelf_axes(shelf_id), self.held[1]
+        up, out = axes[:, 2], -axes[:, 1]
+        along, rise = self._shelf(shelf_id).lay
+        radius = min(self._kind(self.held[0]).size[:2]) / 2
+        bottom = self.scene.object_pos(shelf_id) + along * axes[:, 0] + rise * up + (radius + LAY_GAP) * out
+        downhill = -np.append(up[:2] / np.linalg.norm(up[:2]), 0.0)
+        self.move_to(bottom + LAY_START * downhill + [0.0, 0.0, max(self.scene.ee_pos()[2] - bottom[2], grip + LAY_ABOVE)])
+        pivot = np.cross([0.0, 0.0, 1.0], up)
+        angle, upright = float(np.arccos(up[2])), yaw_matrix(self.yaw) @ DOWN
+        for k in range(1, LAY_STEPS + 1):  # turned a step at a time, kept over the shelf as it turns
+            turn = turned(pivot / np.linalg.norm(pivot), angle * k / LAY_STEPS)
+            self.facing = turn @ upright
+            self.move_to(bottom + grip * turn[:, 2] + (LAY_OVER * (1 - k / LAY_STEPS) + LAY_NEAR) * out)
+        self.move_linear(bottom + grip * up, speed=0.05)
+        self.open()
+        self.hold(LAY_SETTLE)
+        self.move_linear(self.scene.ee_pos() + LAY_BACK * out, speed=0.05)
+        self.facing = None
+
+    def turn_on(self, knob_id: str) -> None:
+        """Take the knob's ridge from above, fingers across it, and turn the hand KNOB_TURN about
+        the knob's axis (the way its joint turns on)."""
+        axis, rot = self.scene.body_pose(knob_id)
+        ridge = np.append(rot[:2, 1], 0.0)  # the ridge lies along the knob's y
+        top = self.scene.surface_below(axis[:2], axis[2] + 0.3)
+        yaw = grasp_yaw(float(np.arctan2(-ridge[0], ridge[1])))  # fingers closing across the ridge
+        grip = np.array([axis[0], axis[1], top - KNOB_GRIP])
+        self.move_to(grip + [0.0, 0.0, 0.07], yaw)
+        self.move_to(grip, yaw)
+        self.close()
+        self.twist(yaw + KNOB_TURN, KNOB_SPEED)
+        self.hold(5)
+        self.q = self.scene.data.qpos[self.scene.arm_qpos].copy()  # where the knob let the hand go: let go there
+        self.open()
+        self.move_to(grip + [0.0, 0.0, 0.1])
+
+    def _drop_point(self, destination_id: str) -> np.ndarray:
+        """Where over a destination a carried thing is let down: the centre of its top, or of an
+        open drawer's uncovered part (between the cabinet's front and the drawer's)."""
+        drawer, top = self._kind(destination_id).drawer, self.top_of(destination_id)
+        if drawer is None:
+            return top
+        out = self._pull_direction(destination_id)
+        travel = float((self.scene.object_pos(destination_id) - np.asarray(self.spec.object(destination_id).pos)) @ out)
+        mouth, front = drawer.opening
+        return top + (mouth + front - travel) / 2 * out
+
+    def _pull_direction(self, drawer_id: str) -> np.ndarray:
+        """The way a drawer slides out, in the world."""
+        return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._drawer(drawer_id).pull)
+
+    def pull_open(self, drawer_id: str, travel: float = DRAWER_PULL) -> None:
+        """Take the drawer's handle bar from the front, the hand level and its fingers closing up and
+        down on the bar, and pull it `travel` out along its slide; let go and back off, up and out."""
+        drawer = self._drawer(drawer_id)
+        site, rot = self.scene.object_pos(drawer_id), self.scene.body_pose(drawer_id)[1]
+        handle = site + rot @ np.asarray(drawer.handle)
+        out = self._pull_direction(drawer_id)
+        self.move_to([*self.scene.ee_pos()[:2], max(self.scene.ee_pos()[2], self.clearance())])
+        self.facing = facing(tuple(-out[:2]), drawer.roll)
+        self.move_to(handle + HANDLE_REACH * out)
+        self._settle(self.q)
+        self.move_linear(handle, speed=0.15)
+        self.close()
+        self.move_linear(handle + travel * out, speed=0.15)
+        self.open()
+        self.move_linear(self.scene.ee_pos() + 0.04 * out + [0.0, 0.0, 0.06], speed=0.2)
+        self.facing = None  # the next move turns the hand down again
