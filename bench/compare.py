@@ -19,7 +19,7 @@ side in one run, (a) ours in that world's scenes (its own LIBERO type, or `refer
 it carries, 2 cameras at 256 px, 1 worker) with (d) LIBERO's own path to the same number of frames
 per episode: LIBERO's `OffScreenRenderEnv.step` in the suite's first task, with both cameras'
 observations at 256 px (in LIBERO's own environment, `.venv-libero`, through
-scripts/libero_reference.py), the frames then written by lerobot's `LeRobotDataset` writer.
+eval/sims/libero_env/reference.py), the frames then written by lerobot's `LeRobotDataset` writer.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ import oracle  # noqa: F401  (headless-rendering defaults)
 from core import parquet, worlds
 from core.profiles import ACTION_KEY, LIBERO, NATIVE, STATE_KEY
 from core.spec import EpisodeSpec
+from eval.sims.libero import PYTHON, in_liberos
 from gen.config import parse
 from gen.products import scenes
 from gen.products.run import generate
@@ -65,11 +66,11 @@ def liberos_own(lengths: list[int], size: int, root: Path, LeRobotDataset: type,
 
     request, frames = root / "libero-bench.json", root / "libero-bench.npz"
     request.write_text(json.dumps({"suite": suite, "task": 0, "size": size, "lengths": lengths}))
-    reference = ROOT / ".venv-libero" / "bin" / "python"
-    if not reference.is_file():
-        raise UserError(f"{reference} is missing: `make setup` builds LIBERO's reference environment")
+    if not PYTHON.is_file():
+        raise UserError(f"{PYTHON} is missing: `make setup` builds LIBERO's reference environment")
     done = subprocess.run(
-        [str(reference), str(ROOT / "scripts/libero_reference.py"), "bench", str(request), str(frames)],
+        in_liberos("reference", "bench", str(request), str(frames)),
+        cwd=ROOT,
         capture_output=True,
         text=True,
     )

@@ -26,7 +26,7 @@ class Spot:
     @property
     def anchor(self) -> str:
         """Where it is, as another simulator is asked to follow it: its site's name, or
-        `<body>@<x>,<y>,<z>` (eval/libero_server.py reads both)."""
+        `<body>@<x>,<y>,<z>` (eval/sims/libero_env/server.py reads both)."""
         return self.site or f"{self.body}@{','.join(map(str, self.offset))}"
 
 

@@ -96,6 +96,6 @@ def widest_interval(rate: dict) -> tuple[float, float]:
 
 def against_chance(rate: dict, chance: float) -> str:
     """A rate against its chance: `above` (`below`) where its widest interval lies above (below)
-    it, else `overlaps`. The battery's verdicts (eval/score.py, eval/report.py) judge by this rule."""
+    it, else `overlaps`. The battery's verdicts (eval/scoring/score.py, eval/scoring/report.py) judge by this rule."""
     lo, hi = widest_interval(rate)
     return "above" if lo > chance else "below" if hi < chance else "overlaps"

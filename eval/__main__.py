@@ -2,11 +2,11 @@
 
 python -m eval policy=oracle exam=datasets/object-exam workers=2
 
-Runs the exam's rollouts in our simulator (or, with sim=libero, in LIBERO's own: eval/libero_sim.py)
+Runs the exam's rollouts in our simulator (or, with sim=libero, in LIBERO's own: eval/sims/libero.py)
 with the policy (oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH,
-ckpt:PATH or any other registered one: eval/registry.py), logs them to
-`rollouts.parquet`, scores the logs with eval/score.py and writes report.json, report.md and
-report.html to `out` (eval/battery.py). Every finished rollout is kept as it ends: an interrupted
+ckpt:PATH or any other registered one: eval/policies/registry.py), logs them to
+`rollouts.parquet`, scores the logs with eval/scoring/score.py and writes report.json, report.md and
+report.html to `out` (eval/scoring/battery.py). Every finished rollout is kept as it ends: an interrupted
 take continues with resume=true.
 """
 
@@ -21,13 +21,13 @@ import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from core.exam import ExamError, read
 from core.profiles import LIBERO
 from eval.policies import FeatureMismatch, PolicyError
-from eval.registry import make
+from eval.policies.registry import make
 from jobs.cli import Failed, UserError, main
 
 
 @dataclass
 class EvalOptions:
-    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/registry.py)
+    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/policies/)
     exam: str  # the exam folder (python -m gen ... split=exam)
     out: str | None = None  # report folder; default runs/<exam folder>-<exam digest>/<policy>
     overwrite: bool = False  # replace the report at `out`, and discard an interrupted take's rollouts
@@ -43,8 +43,8 @@ class EvalOptions:
 def check_out(out: Path, overwrite: bool) -> None:
     """Before the policy loads and any rollout runs: `out` must be a folder that can be written
     (as must its parent, where the rollouts are kept), and hold no report unless `overwrite`."""
-    from eval.battery import REPORT_FILES
-    from eval.report import check_out as check_report_out
+    from eval.scoring.report import check_out as check_report_out
+    from eval.scoring.battery import REPORT_FILES
     from jobs.output import check_writable
 
     check_report_out(out, overwrite, REPORT_FILES)
@@ -56,10 +56,10 @@ def evaluate(options: EvalOptions) -> None:
         raise UserError(f"workers must be at least 1, got {options.workers}")
     if options.rows is not None and options.rows < 1:
         raise UserError(f"rows must be at least 1, got {options.rows}")
-    from eval import libero_sim
-    from eval.baseline import exam_digest
-    from eval.battery import kept_rollouts, take  # the simulator stack loads only for valid input
-    from eval.rollout import ProfileMismatch
+    from eval.sims import libero as libero_sim
+    from eval.scoring.baseline import exam_digest
+    from eval.scoring.battery import kept_rollouts, take  # the simulator stack loads only for valid input
+    from eval.sims.rollout import ProfileMismatch
 
     if options.sim not in libero_sim.SIMS:
         raise UserError(f"sim must be one of {', '.join(libero_sim.SIMS)}, got {options.sim!r}")

@@ -32,8 +32,9 @@ import pandas as pd
 from core.exam import Exam, ExamError, read
 from core.products import REPORTS, ROLLOUTS
 from core.rates import Rate
-from eval.baseline import exam_digest
-from eval.score import SIM_SUCCESS, LogError, clustered_rate, judge, landed, parsed_logs, read_logs, score
+from eval.scoring.baseline import exam_digest
+from eval.scoring.score import clustered_rate, judge, landed, parsed_logs, score
+from eval.sims.log import SIM_SUCCESS, LogError, read_logs
 from jobs.cli import UserError, main
 from jobs.output import check_writable
 

@@ -34,7 +34,7 @@ from core.profiles import STATE_KEY
 from core.programs import achieved
 from core.spec import EpisodeSpec
 from core.success import Outcome
-from eval.rollout import check_action, observe
+from eval.sims.rollout import check_action, observe
 from oracle.render import Cameras
 from oracle.scene import spec_scene
 

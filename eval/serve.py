@@ -16,13 +16,13 @@ import numpy as np
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
 from eval.policies import PolicyError
-from eval.registry import make
+from eval.policies.registry import make
 from jobs.cli import Failed, UserError, main
 
 
 @dataclass
 class ServeOptions:
-    policy: str  # a policy that predicts action chunks, e.g. ckpt:PATH (eval/registry.py)
+    policy: str  # a policy that predicts action chunks, e.g. ckpt:PATH (eval/policies/registry.py)
     host: str = "127.0.0.1"  # address to listen on
     port: int = 8000  # port to listen on; 0 picks a free one (printed)
 

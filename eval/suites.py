@@ -26,7 +26,7 @@ from core import libero, worlds
 from core.exam import read
 from core.spec import FAST
 from eval.policies import FeatureMismatch, PolicyError
-from eval.registry import make
+from eval.policies.registry import make
 from gen.products.canonical import CanonicalOptions, build, suite_of
 from jobs.cli import UserError, main
 
@@ -36,7 +36,7 @@ PICTURE = "suites.png"
 
 @dataclass
 class SuitesOptions:
-    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/registry.py)
+    policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/policies/)
     suites: list[str] = field(default_factory=lambda: ["all"])  # suite names, or [all]: every covered suite of `world`
     world: str = "libero_object"  # the LIBERO world whose suites `all` means
     states: int = 5  # LIBERO's initial states per task in each exam (drawn with seed)
@@ -99,7 +99,7 @@ def run(options: SuitesOptions) -> None:
         raise UserError(f"workers must be at least 1, got {options.workers}")
     names = chosen(options)
     from eval.__main__ import check_out
-    from eval.battery import take
+    from eval.scoring.battery import take
 
     out = Path(options.out or Path("runs") / "suites" / re.sub(r"[^A-Za-z0-9_.-]+", "_", options.policy))
     for name in names:

@@ -12,7 +12,7 @@
   state is restored without a reset (LIBERO's `set_init_state`) the controller's first control
   step still reads the arm as it stood at the reset (1.4 refreshes what it read only after it
   has run once); both move the hand during LIBERO's settle steps from its own initial states,
-  and eval/libero_sim.py runs exams in LIBERO to compare. The gripper follows robosuite 1.4's
+  and eval/sims/libero.py runs exams in LIBERO to compare. The gripper follows robosuite 1.4's
   PandaGripper: the sign of the command moves the finger targets 0.01 of their range per substep.
 
 A drive is made for one `Scene` (oracle/scene.py) and shares its model and data.

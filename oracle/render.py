@@ -66,7 +66,7 @@ class Cameras:
         """Per camera, the name of the object each pixel of its frame shows (robosuite's object
         name: its top-level body's without `_main`; '' for none), from MuJoCo's segmentation
         render with the frames' options, mirrored as they are: what the picture tests judge each
-        object by (scripts/libero_reference.py writes LIBERO's)."""
+        object by (eval/sims/libero_env/reference.py writes LIBERO's)."""
         m = self.scene.model
         if self._names is None:  # each geom's object, and '' for no geom
             roots = m.body_rootid[m.geom_bodyid]

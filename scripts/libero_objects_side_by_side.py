@@ -12,6 +12,7 @@ both revisions have: scene_for, load_state in either form, Cameras.render).
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -41,13 +42,14 @@ class ObjectsOptions:
 
 
 def liberos_frames(world: str, cases: list[list[int]], out: Path) -> Path:
-    """LIBERO's own `render` of a suite's (task, state) cases, in `.venv-libero` (scripts/libero_reference.py)."""
+    """LIBERO's own `render` of a suite's (task, state) cases, in `.venv-libero` (eval/sims/libero_env/reference.py)."""
     from core.profiles import LIBERO
 
     request = out.with_suffix(".json")
     request.write_text(json.dumps({"suite": world, "size": LIBERO.image_size, "cases": cases}))
-    reference, script = ROOT / ".venv-libero" / "bin" / "python", ROOT / "scripts" / "libero_reference.py"
-    subprocess.run([str(reference), str(script), "render", str(request), str(out)], check=True, capture_output=True)
+    from eval.sims.libero import in_liberos
+
+    subprocess.run(in_liberos("reference", "render", str(request), str(out)), cwd=ROOT, check=True, capture_output=True)
     return out
 
 
@@ -104,16 +106,17 @@ def _before(revision: str, world: str, cases: list[list[int]], theirs: Path, tmp
     request, out = tmp / f"{world}-before.json", tmp / f"{world}-before.npz"
     request.write_text(json.dumps({"world": world, "cases": cases}))
     script = tree / "scripts" / Path(__file__).name
-    subprocess.run([sys.executable, str(script), "frames", str(request), str(theirs), str(out)], check=True, cwd=tree)
+    env = {**os.environ, "PYTHONPATH": str(tree)}  # that revision's packages, not this checkout's
+    subprocess.run([sys.executable, str(script), "frames", str(request), str(theirs), str(out)], check=True, cwd=tree, env=env)
     return dict(np.load(out))
 
 
 def picture(options: ObjectsOptions) -> None:
-    from libero_reference import named, object_differences
     from PIL import Image, ImageDraw
 
     from core.profiles import LIBERO
     from core.spec import LOOKS
+    from eval.sims.libero_env.reference import named, object_differences
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp_name:

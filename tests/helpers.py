@@ -20,6 +20,8 @@ from core.exam import FACES, Exam, read
 from core.profiles import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
 from core.worlds import World
+from eval.sims.libero import in_liberos
+from eval.sims.libero_env.reference import named, object_differences  # the same readout in the tests and the pictures in docs/
 from gen.config import parse
 from gen.planning.plan import world_sim
 from gen.products.canonical import CanonicalOptions, Suite, load_state, suite_of
@@ -29,8 +31,6 @@ from oracle.render import Cameras
 from oracle.scene import Scene, scene_for
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "scripts"))
-from libero_reference import named, object_differences  # noqa: E402  (the same readout in the tests and the pictures in docs/)
 
 LIBERO_PYTHON = ROOT / ".venv-libero" / "bin" / "python"
 # LIBERO's initial states per task the picture tests compare (each a render in LIBERO's env and in
@@ -49,7 +49,7 @@ OBJECT_BOUND = 12.0  # ... and inside each object's and fixture's own pixels (a 
 class Pictures:
     """The picture tests' figures against LIBERO's own frames, worst over the states compared: per
     camera, the whole frame's mean absolute difference, and each object's and fixture's inside its
-    own pixels (scripts/libero_reference.py's `object_differences`)."""
+    own pixels (eval/sims/libero_env/reference.py's `object_differences`)."""
 
     def __init__(self) -> None:
         self.frame = dict.fromkeys(LIBERO.cameras, 0.0)
@@ -148,12 +148,13 @@ def initial_state_pictures(
 
 
 def liberos_own(command: str, request: dict, out: Path) -> Path:
-    """Run a command of scripts/libero_reference.py in LIBERO's own environment (`.venv-libero`)."""
+    """Run a command of eval/sims/libero_env/reference.py in LIBERO's own environment (`.venv-libero`)."""
     assert LIBERO_PYTHON.is_file(), f"{LIBERO_PYTHON} is missing: `make setup` builds LIBERO's reference environment"
     request_file = out.with_name(out.name + ".request.json")
     request_file.write_text(json.dumps(request))
     done = subprocess.run(
-        [str(LIBERO_PYTHON), str(ROOT / "scripts" / "libero_reference.py"), command, str(request_file), str(out)],
+        in_liberos("reference", command, str(request_file), str(out)),
+        cwd=ROOT,
         capture_output=True,
         text=True,
     )
@@ -209,8 +210,8 @@ class Shared:
     def take(self, exam: Path, policy: str, trials: int, faces: Sequence[str] = ()) -> dict:
         """`policy`'s report on the first `trials` trials of a shared exam, their rows of `faces` (default
         every row), with no shortcut baseline."""
-        from eval.battery import take
-        from eval.registry import make
+        from eval.policies.registry import make
+        from eval.scoring.battery import take
 
         def taken(folder: Path) -> None:
             whole = read(exam)
@@ -237,7 +238,7 @@ def canonical_reports(shared: Shared, trials: dict[str, int], world: str = "libe
 
 
 def liberos_replay(dataset: Path, world: World) -> dict:
-    """A dataset's episodes as scripts/libero_reference.py's `replay` takes them, rebuilt from
+    """A dataset's episodes as eval/sims/libero_env/reference.py's `replay` takes them, rebuilt from
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
     joints and recorded actions; `target` is what moves and `container` where it goes. A world
     with fixtures replays in its suite's own scene, the fixtures where the records stand them. A

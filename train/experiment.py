@@ -316,7 +316,8 @@ def _named_places(
     """Exam -> the `named_place` shortcut's report and which of its swaps it obeyed, where the referent's
     confounded data ties each name to a place of its own (LIBERO-Object: two); {} where it does not."""
     from core.products import ROLLOUTS
-    from eval.score import read_logs, swaps_obeyed
+    from eval.scoring.score import swaps_obeyed
+    from eval.sims.log import read_logs
 
     if registry.load(referent).code.named_place is None:
         return {}
@@ -333,7 +334,8 @@ def _beyond(exam: Exam, report_dir: Path, place: dict[int, bool]) -> dict:
     """Obeyed name (5 cm) on the swaps the `named_place` shortcut does not obey: there a name read as a
     place leads elsewhere, so only reading it finds the object."""
     from core.products import ROLLOUTS
-    from eval.score import clustered_rate, read_logs, swaps_obeyed
+    from eval.scoring.score import clustered_rate, swaps_obeyed
+    from eval.sims.log import read_logs
 
     mine, trial = swaps_obeyed(exam, read_logs(report_dir / ROLLOUTS)[0]), exam.trials.set_index("row")["trial"]
     rows = [row for row, obeyed in place.items() if not obeyed]

@@ -71,7 +71,7 @@ class CheckpointPolicy:
     """Runs a checkpoint in the battery: embeds each instruction once, predicts a chunk of
     actions and executes the first `replan` of them before looking again."""
 
-    argument = "PATH"  # written ckpt:PATH (eval/registry.py)
+    argument = "PATH"  # written ckpt:PATH (eval/policies/registry.py)
     needs_images = True
 
     def __init__(self, path: str, replan: int = 5) -> None:

@@ -155,7 +155,7 @@ def exam_report(
     """The report of the checkpoint `weights` on `rows` of `exam`, taken once (in our simulator or,
     `sim=libero`, in LIBERO's own) and read back on later runs while the weights it was taken with
     are still the ones there."""
-    from eval.battery import take
+    from eval.scoring.battery import take
     from train.policy import CheckpointPolicy
 
     def run() -> None:
@@ -174,11 +174,11 @@ def weights_digest(weights: Path) -> str:
 
 
 def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: str) -> dict:
-    """The report of the reference policy `policy` (eval/policies.py) on the whole of `exam`,
+    """The report of the reference policy `policy` (eval/policies/__init__.py) on the whole of `exam`,
     taken once and read back while the exam is the same."""
-    from eval.baseline import exam_digest
-    from eval.battery import take
-    from eval.registry import make
+    from eval.policies.registry import make
+    from eval.scoring.baseline import exam_digest
+    from eval.scoring.battery import take
 
     def run() -> None:
         take(exam, exam.trials, make(policy), out, 2, policy, baseline=False)

@@ -16,7 +16,7 @@ import pytest
 from core import contact, worlds
 from core.exam import Exam, trial_rows
 from core.spec import EpisodeSpec
-from eval.score import score
+from eval.scoring.score import score
 from gen.planning.plan import default_sim, plan
 from referents import registry
 

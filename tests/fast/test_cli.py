@@ -149,7 +149,7 @@ ENTRY_POINTS = [
     ("train.axes", False),
     ("bench/generate.py", False),
     ("bench/compare.py", False),
-    ("bench/eval.py", False),
+    ("bench/battery.py", False),
     ("bench/first_try.py", False),
     ("scripts/first_frames.py", True),
 ]
@@ -319,7 +319,7 @@ def test_a_world_that_cannot_carry_a_type_lists_every_type_it_carries(tmp_path: 
 
 @pytest.mark.parametrize("command", ["eval", "eval.suites"])
 def test_help_names_every_registered_policy(command: str) -> None:
-    from eval.registry import names
+    from eval.policies.registry import names
 
     shown = subprocess.run([sys.executable, "-m", command, "--help"], capture_output=True, text=True).stdout
     policy = next(line for line in shown.splitlines() if line.strip().startswith("policy="))

@@ -3,7 +3,7 @@ edge has its centre outside it), or a heat map over the frame; nothing else."""
 
 import numpy as np
 
-from eval.rollout import check_prediction
+from eval.sims.rollout import check_prediction
 
 
 def test_a_point_off_the_frame_is_a_prediction_and_a_broken_one_is_named() -> None:

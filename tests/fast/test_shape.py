@@ -28,14 +28,16 @@ def test_the_architecture_page_shows_the_current_import_graph() -> None:
     assert import_graph.block(import_graph.imports()) in import_graph.PAGE.read_text()
 
 
-def test_camera_names_and_feature_keys_live_only_in_the_layout_module() -> None:
+def test_camera_names_and_feature_keys_live_only_in_the_profiles_module() -> None:
+    """core/profiles.py names them; LIBERO's side (eval/sims/libero_env/), which imports numpy and
+    LIBERO only, names LIBERO's own cameras."""
     names = set()
-    for layout in PROFILES.values():
-        names |= {*layout.cameras, *layout.cameras.values(), *layout.image_keys}
+    for profile in PROFILES.values():
+        names |= {*profile.cameras, *profile.cameras.values(), *profile.image_keys}
     found = []
     for package in PACKAGES:
         for path in (ROOT / package).rglob("*.py"):
-            if path == ROOT / "core/profiles.py":
+            if path == ROOT / "core/profiles.py" or (ROOT / "eval/sims/libero_env") in path.parents:
                 continue
             for node in ast.walk(ast.parse(path.read_text())):
                 if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:

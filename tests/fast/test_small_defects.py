@@ -43,7 +43,7 @@ def bare_python(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_a_libero_environment_without_its_packages_is_refused_by_the_check(
     bare_python: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from eval import libero_sim
+    from eval.sims import libero as libero_sim
 
     monkeypatch.setattr(libero_sim, "PYTHON", bare_python)
     exam = SimpleNamespace(meta={"world": "libero_object"})
@@ -104,7 +104,7 @@ def _product(folder: Path, kind: str) -> Path:
 @pytest.mark.parametrize("overwrite", [False, True])
 def test_eval_and_score_refuse_to_write_a_report_into_a_product(tmp_path: Path, kind: str, overwrite: bool) -> None:
     from eval.__main__ import check_out
-    from eval.report import check_out as check_report_out
+    from eval.scoring.report import check_out as check_report_out
 
     folder = _product(tmp_path / kind, kind)
     before = sorted(p.relative_to(folder) for p in folder.rglob("*"))

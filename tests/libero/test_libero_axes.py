@@ -24,8 +24,8 @@ from core import worlds
 from core.exam import read
 from core.profiles import LIBERO
 from core.spec import EpisodeSpec
-from eval.battery import take
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
 from gen.planning.audit import audit
 from gen.planning.plan import default_sim, plan
 from gen.products import scenes

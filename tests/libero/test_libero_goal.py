@@ -1,5 +1,5 @@
 """The libero_goal world against LIBERO's own environment (`.venv-libero`, driven by
-scripts/libero_reference.py): the same physics model, the same pictures at LIBERO-Goal's own
+eval/sims/libero_env/reference.py): the same physics model, the same pictures at LIBERO-Goal's own
 initial states, recorded actions that LIBERO's own `check_success()` accepts, and the goal axis's
 exams: LIBERO's own states (the tasks our skills can do) and displaced objects; its motions (drawers,
 the knob, the push) and the verb axis in its scene."""
@@ -7,7 +7,6 @@ the knob, the push) and the verb axis in its scene."""
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,8 +19,9 @@ from core.exam import read
 from core.programs import succeeded
 from core.spec import FAST, LOOKS, EpisodeSpec
 from core.success import Outcome
-from eval.battery import take
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
+from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
 from gen.planning.plan import default_sim, plan
 from gen.products import scenes
 from gen.products.canonical import covered
@@ -48,8 +48,6 @@ SUITE = "libero_goal"
 # draws every thing within it.
 OWN_BOUNDS = {"flat_stove": 17.0, "akita_black_bowl": 14.0}
 ASSETS = (("akita_black_bowl", 1), ("cream_cheese", 1), ("plate", 1), ("wine_bottle", 1))
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
-from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 
 @pytest.fixture(scope="module")

@@ -17,8 +17,8 @@ import pytest
 from core import libero
 from core.exam import read
 from core.spec import FAST, FULL
-from eval.battery import take
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
 from gen.planning.plan import world_sim
 from gen.products.canonical import CanonicalOptions, build, suite_of, trial_spec
 from helpers import initial_state_pictures, rows_of

@@ -21,8 +21,8 @@ import pytest
 
 from core.exam import SWITCH, read
 from core.profiles import STATE_KEY, TASK_KEY
-from eval.battery import take
 from eval.policies import Context
+from eval.scoring.battery import take
 from helpers import make_dataset
 
 STEPS = 12  # each rollout: the settle steps, then this many of the policy's actions
@@ -70,7 +70,7 @@ def _agree(exam_root: Path, tmp_path: Path, through_switch: bool = False) -> tup
     assert mine["simulator"] == "ours" and libero["simulator"] == "libero" and not libero["errors"]
     import mujoco
 
-    from eval.libero_sim import PYTHON
+    from eval.sims.libero import PYTHON
 
     asked = [str(PYTHON), "-c", "import mujoco; print(mujoco.__version__)"]
     theirs_mujoco = subprocess.run(asked, capture_output=True, text=True)
@@ -116,7 +116,7 @@ def test_a_canonical_exam_runs_in_liberos_simulator_as_in_ours(canonical: Path, 
     a switch row shows the new instruction from its step on in LIBERO's simulator too."""
     _agree(canonical, tmp_path, through_switch=True)
     from eval.agreement import compare
-    from eval.score import read_logs
+    from eval.sims.log import read_logs
 
     paired = compare(read(canonical), *(read_logs(tmp_path / s / "rollouts.parquet")[0] for s in ("ours", "libero")), "scripted")
     assert paired["paired"]["swap"]["rate"] == paired["paired"]["task"]["rate"] == 1.0  # the same motion, the same outcome
@@ -191,7 +191,7 @@ def test_bad_input_is_refused_before_any_rollout(
 def test_a_native_exam_or_a_missing_libero_environment_is_refused(
     canonical: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from eval import libero_sim
+    from eval.sims import libero as libero_sim
     from eval.__main__ import EvalOptions, evaluate
     from jobs.cli import main
 

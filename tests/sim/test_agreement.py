@@ -4,7 +4,7 @@ replaces a file at `out=` it was not allowed to, nor fails after the figures on 
 have refused first.
 
 LIBERO's simulator is not needed: the `libero` take is a copy of a take in ours (the `nothing`
-policy on a 2-trial exam) whose rollouts.parquet metadata key `deconfound.sim` (eval/score.py
+policy on a 2-trial exam) whose rollouts.parquet metadata key `deconfound.sim` (eval/sims/log.py
 SIM_KEY) is rewritten to `libero`, which is exactly what a real `sim=libero` take writes there."""
 
 from __future__ import annotations
@@ -17,13 +17,13 @@ import pyarrow.parquet as pq
 import pytest
 
 from core.exam import read
-from eval.baseline import exam_digest
-from eval.battery import take
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.baseline import exam_digest
+from eval.scoring.battery import take
 from helpers import SMALL_EXAM, Shared
 from jobs.cli import main
 
-# rollouts.parquet's metadata keys (eval/score.py SIM_KEY, POLICY_KEY, EXAM_KEY), spelt out so that
+# rollouts.parquet's metadata keys (eval/sims/log.py SIM_KEY, POLICY_KEY, EXAM_KEY), spelt out so that
 # this file also runs against code from before the exam's digest was recorded
 SIM, POLICY, EXAM = b"deconfound.sim", b"deconfound.policy", b"deconfound.exam"
 

@@ -17,10 +17,10 @@ import pytest
 from core import parquet
 from core.exam import FACES, read
 from core.spec import SimSettings
-from eval.battery import take
 from eval.policies import Context, PolicyError
-from eval.registry import make, names, register
-from eval.rollout import Runner
+from eval.policies.registry import make, names, register
+from eval.scoring.battery import take
+from eval.sims.rollout import Runner
 from gen.planning.plan import plan
 from gen.products import scenes
 from helpers import make_dataset, rows_of

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from eval.__main__ import EvalOptions, evaluate
-from eval.registry import make, register
+from eval.policies.registry import make, register
 from helpers import Shared, interruptible, make_dataset
 from jobs.cli import main
 

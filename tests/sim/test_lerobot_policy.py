@@ -20,7 +20,7 @@ from peft import PeftModel
 from core.exam import read
 from core.profiles import ACTION_KEY, IMAGE_PREFIX, TASK_KEY
 from eval.policies import FeatureMismatch, PolicyError
-from eval.registry import make
+from eval.policies.registry import make
 from helpers import ONE_TRIAL_64, Shared
 
 ROOT = Path(__file__).resolve().parents[2]

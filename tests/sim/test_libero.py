@@ -17,10 +17,10 @@ from core.exam import read
 from core.profiles import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
 from core.programs import succeeded
 from core.spec import EpisodeSpec, SimSettings
-from eval.battery import take
 from eval.env import ExamEnv
-from eval.registry import make
-from eval.rollout import ProfileMismatch, Runner
+from eval.policies.registry import make
+from eval.scoring.battery import take
+from eval.sims.rollout import ProfileMismatch, Runner
 from gen.lerobot.reader import LeRobotReader
 from gen.planning.plan import plan
 from gen.products import scenes

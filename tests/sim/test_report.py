@@ -17,8 +17,9 @@ from core import contact, worlds
 from core.exam import Exam, read
 from core.rates import Rate, cluster_ci
 from core.spec import EpisodeSpec
-from eval.report import html, plots
-from eval.score import LogError, score
+from eval.scoring.report import html, plots
+from eval.scoring.score import score
+from eval.sims.log import LogError
 from helpers import make_dataset
 
 FAR = [-0.5, 0.0, 1.3]  # where the hand is when it goes nowhere: above the robot's base

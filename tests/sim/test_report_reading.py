@@ -21,8 +21,8 @@ import pytest
 from core import contact, worlds
 from core.exam import Exam, read
 from core.spec import EpisodeSpec
-from eval.report import html, markdown
-from eval.score import score
+from eval.scoring.report import html, markdown
+from eval.scoring.score import score
 from helpers import SMALL_EXAM, Shared
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -80,8 +80,8 @@ def test_the_report_says_how_to_read_it(exam: Exam) -> None:
 @pytest.fixture(scope="module")
 def untrained_take(exam: Exam, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """`position` (which predicts the object its plan acts on) posing as a policy whose pointer was never trained."""
-    from eval.battery import take
-    from eval.registry import make
+    from eval.policies.registry import make
+    from eval.scoring.battery import take
 
     policy = make("position")
     policy.prediction_trained = False

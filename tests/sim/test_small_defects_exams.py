@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from eval import libero_sim
+from eval.sims import libero as libero_sim
 from eval.__main__ import EvalOptions, evaluate
 from jobs.cli import main
 

@@ -18,9 +18,9 @@ import torch
 
 from core.exam import read
 from core.profiles import NATIVE
-from eval.battery import take
 from eval.policies import FeatureMismatch
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
 from gen.config import parse
 from gen.lerobot.stats import image_histogram
 from gen.lerobot.video import encode_episode

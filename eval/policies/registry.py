@@ -14,9 +14,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from importlib.metadata import EntryPoint, entry_points
 
-from eval.lerobot_policy import LeRobotPolicy
 from eval.policies import NamedPlace, Nothing, Oracle, Policy, PolicyError, Position, Random
-from eval.remote import RemotePolicy
+from eval.policies.lerobot import LeRobotPolicy
+from eval.policies.remote import RemotePolicy
 
 GROUP = "deconfound.policies"
 

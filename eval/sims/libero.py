@@ -2,7 +2,7 @@
 
 Each rollout runs in LIBERO's `OffScreenRenderEnv` (LIBERO's code with its robosuite 1.4.0 and
 mujoco, in `.venv-libero`, which `make setup` builds), driven from here through a server process
-(eval/libero_server.py) while the policy runs in this process. Per row:
+(eval/sims/libero_env/server.py) while the policy runs in this process. Per row:
 
 * the environment: a canonical exam's (`python -m gen.canonical`, LIBERO-PRO suites included) is
   the task's own BDDL file, set to LIBERO's own initial-state vector of the trial; a generated exam's
@@ -38,14 +38,19 @@ from core import libero, programs, worlds
 from core.exam import Exam
 from core.profiles import IMAGE_PREFIX, STATE_KEY, TASK_KEY
 from core.spec import EpisodeSpec
-from eval.rollout import SimError
+from eval.sims.rollout import SimError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PYTHON = ROOT / ".venv-libero" / "bin" / "python"  # LIBERO's own environment (make setup)
-SERVER = ROOT / "eval" / "libero_server.py"
 SIMS = ("ours", "libero")  # where an exam's rollouts run: our rebuild of the world, or LIBERO's own simulator
 PRIVILEGED = ("oracle", "position", "named_place")  # read our simulator's state and plans: they stay there
 NEEDS = ("numpy", "mujoco", "robosuite", "bddl", "libero")  # what LIBERO's server imports there, LIBERO's own included
+
+
+def in_liberos(module: str, *args: str) -> list[str]:
+    """The command running a module of eval/sims/libero_env (`server`, `reference`) in LIBERO's own
+    environment: run it with `cwd=ROOT`, where `-m` finds the package."""
+    return [str(PYTHON), "-m", f"eval.sims.libero_env.{module}", *args]
 
 
 class SimUnavailable(ValueError):
@@ -57,7 +62,7 @@ class SimFailed(Exception):
 
 
 def _read_frame(stream):  # noqa: ANN001, ANN202
-    from eval.libero_server import read_frame
+    from eval.sims.libero_env.server import read_frame
 
     return read_frame(stream)
 
@@ -120,7 +125,7 @@ def versions(sim: str) -> dict[str, str]:
 
 
 def _observing() -> str:
-    from eval.registry import names
+    from eval.policies.registry import names
 
     return ", ".join(n for n in names() if n.partition(":")[0] not in PRIVILEGED)
 
@@ -188,7 +193,7 @@ class Rows:
         """One BDDL problem for every trial of a generated exam: all its objects, on the world's floor
         or its suite's table with the fixtures (the goal is a placeholder: rows are judged by their own
         asks, `predicate`)."""
-        from eval.libero_server import floor_bddl, table_bddl
+        from eval.sims.libero_env.server import floor_bddl, table_bddl
 
         first, second, *_ = self.union  # a placeholder goal LIBERO's parser takes
         goal = f"(On {first} {second})"
@@ -227,7 +232,8 @@ class LiberoSim:
         self.rows = Rows(meta, specs)
         self._log = tempfile.TemporaryFile()
         self.server = subprocess.Popen(
-            [str(PYTHON), str(SERVER)],
+            in_liberos("server"),
+            cwd=ROOT,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=self._log,
@@ -240,7 +246,7 @@ class LiberoSim:
         self._containers: set[str] = set()  # the row's movable containers (a basket), whose turns are logged
 
     def _ask(self, header: dict, arrays: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str, np.ndarray]]:
-        from eval.libero_server import write_frame
+        from eval.sims.libero_env.server import write_frame
 
         try:
             write_frame(self.server.stdin, header, arrays)

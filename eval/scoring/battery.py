@@ -32,13 +32,14 @@ from tqdm import tqdm
 from core.exam import Exam, read
 from core.products import REPORTS, ROLLOUTS
 from core.spec import EpisodeSpec
-from eval.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
-from eval.libero_sim import versions
 from eval.policies import Policy
-from eval.registry import make
-from eval.report import write_reports
-from eval.rollout import OurSim, Runner, Sim
-from eval.score import BASELINE_MEASURED, EXAM_KEY, POLICY_KEY, PREDICTION_KEY, SIM_KEY, VERSIONS_KEY, read_logs, score
+from eval.policies.registry import make
+from eval.scoring.baseline import SHORTCUT, cached_baseline, exam_digest, store_baseline
+from eval.scoring.report import write_reports
+from eval.scoring.score import BASELINE_MEASURED, score
+from eval.sims.libero import versions
+from eval.sims.log import EXAM_KEY, POLICY_KEY, PREDICTION_KEY, SIM_KEY, VERSIONS_KEY, read_logs
+from eval.sims.rollout import OurSim, Runner, Sim
 from jobs.partial import Partial
 from jobs.processes import die_with
 
@@ -93,10 +94,10 @@ def take(
     reports to `out`; returns the report and the seconds the rollouts run now took (the shortcut
     baseline's, measured on first use with `baseline`, not included). With workers > 1
     and a `policy_name`, contiguous chunks of rows run in processes that each rebuild the policy
-    from its name and `policy_options` (eval/registry.py); the logs are the same either way.
+    from its name and `policy_options` (eval/policies/registry.py); the logs are the same either way.
     An interrupted take's rollouts are continued with `resume`, discarded with `discard`, and
     refused with neither; interrupting this one raises KeyboardInterrupt saying what was kept.
-    `sim` is where the rollouts run: our simulator, or LIBERO's own (`libero`, eval/libero_sim.py)."""
+    `sim` is where the rollouts run: our simulator, or LIBERO's own (`libero`, eval/sims/libero.py)."""
     check = getattr(policy, "check", None)
     if check is not None:  # a checkpoint that cannot read this exam stops here, before any rollout
         check(exam.features)
@@ -134,10 +135,10 @@ def take(
 
 
 def make_sim(name: str, exam: Exam) -> Sim:
-    """The simulator `name` (eval/libero_sim.py SIMS) for rollouts of `exam`."""
+    """The simulator `name` (eval/sims/libero.py SIMS) for rollouts of `exam`."""
     if name == OurSim.name:
         return OurSim()
-    from eval.libero_sim import LiberoSim
+    from eval.sims.libero import LiberoSim
 
     specs = [EpisodeSpec.from_json(s) for s in exam.trials.drop_duplicates("trial")["spec"]]
     return LiberoSim(exam.meta, specs)

@@ -37,7 +37,7 @@ INSTALL = "make setup installs it (lerobot==0.4.4 without its torch pin; docs/EX
 
 
 class LeRobotPolicy:
-    argument = "PATH"  # written lerobot:PATH (eval/registry.py): a pretrained_model folder
+    argument = "PATH"  # written lerobot:PATH (eval/policies/registry.py): a pretrained_model folder
     needs_images = True
 
     def __init__(self, path: str, device: str = "cpu") -> None:

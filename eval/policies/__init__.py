@@ -31,7 +31,7 @@ learned policy must ignore:
   stands there: the shortcut of a policy that learnt the words as place codes;
 * `nothing` — holds the home pose; `random` — a seeded random walk of joint targets.
 
-eval/registry.py makes them (and every other policy) by name.
+eval/policies/registry.py makes them (and every other policy) by name.
 """
 
 from __future__ import annotations

@@ -15,7 +15,6 @@ predicates under `sim=libero`).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -25,46 +24,9 @@ from core.exam import SWITCH
 from core.profiles import IMAGE_PREFIX, NATIVE, PROFILES, STATE_KEY, TASK_KEY, Profile
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
-from eval.score import SIM_SUCCESS
+from eval.sims.log import Log
 from oracle.render import Cameras
 from oracle.scene import Scene, spec_scene
-
-
-@dataclass
-class Log:
-    row: int
-    ee: list[list[float]] = field(default_factory=list)
-    objects: dict[str, list[list[float]]] = field(default_factory=dict)
-    turns: dict[str, list[list[float]]] = field(default_factory=dict)  # movable containers' orientations (w, x, y, z)
-    error: str | None = None
-    located: list[float] | None = None
-    predicted: list[float] | None = None  # [column, row] in the agentview frame, with the first chunk
-    sim_success: bool | None = None  # the simulator's own verdict on the row's ask (LIBERO's predicates), where it has one
-
-    @property
-    def steps(self) -> int:
-        return max(len(self.ee) - 1, 0)
-
-    def record(self, scene: Scene | Sim) -> None:
-        self.ee.append([float(v) for v in scene.ee_pos()])
-        for k, pos in scene.positions().items():
-            self.objects.setdefault(k, []).append(list(pos))
-        for k, quat in scene.turns().items():
-            self.turns.setdefault(k, []).append(list(quat))
-
-    def to_row(self) -> dict:
-        verdict = {} if self.sim_success is None else {SIM_SUCCESS: self.sim_success}
-        return {
-            "row": self.row,
-            "steps": self.steps,
-            "ee": self.ee,
-            "objects": json.dumps(self.objects),
-            "turns": json.dumps(self.turns),
-            "error": self.error,
-            "located": self.located,
-            "predicted": self.predicted,
-            **verdict,
-        }
 
 
 def observe(scene: Scene, cameras: Cameras | None, instruction: str, occluded: bool) -> dict:
@@ -124,7 +86,7 @@ def check_prediction(predicted: object, size: int) -> tuple[list[float] | None, 
     if not np.all(np.isfinite(p)):
         return None, f"prediction {p.tolist()} is not a finite point"
     # a point off the frame is a prediction, not a broken one: an object at the frame's edge has its
-    # centre outside it (scored by the nearest object pixel, eval/score.py), a far one misses
+    # centre outside it (scored by the nearest object pixel, eval/scoring/score.py), a far one misses
     return [float(v) for v in p], None
 
 
@@ -153,7 +115,7 @@ class Sim(Protocol):
 
 class OurSim:
     """Our rebuild of the exam's world (oracle/scene.py): where exams run unless `sim=libero` says
-    LIBERO's own simulator (eval/libero_sim.py, the same methods). A renderer is kept per scene."""
+    LIBERO's own simulator (eval/sims/libero.py, the same methods). A renderer is kept per scene."""
 
     name = "ours"
 

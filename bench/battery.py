@@ -1,6 +1,6 @@
 """Battery throughput: rollouts per minute for the reference policies.
 
-    python bench/eval.py [trials=40] [referent=object] [profile=native] ['policies=[oracle,random]'] ['workers=[1,2]']
+    python bench/battery.py [trials=40] [referent=object] [profile=native] ['policies=[oracle,random]'] ['workers=[1,2]']
 
 Builds an exam (trials x (task + swaps + occ + nonsense) rollouts), takes it with each policy
 at each worker count, and prints rollouts/min. Reference policies read no cameras, so this is
@@ -14,14 +14,10 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-# `python bench/eval.py` puts bench/ first on the path, where this file would shadow the eval package.
-if sys.path[0] == str(Path(__file__).resolve().parent):
-    sys.path.pop(0)
-
 from core.exam import read
-from eval.battery import take
 from eval.policies import PolicyError
-from eval.registry import make
+from eval.policies.registry import make
+from eval.scoring.battery import take
 from gen.config import parse
 from gen.products.run import generate
 from jobs.cli import UserError, main
@@ -32,7 +28,7 @@ class BenchOptions:
     trials: int = 40  # exam trials (each one task + swaps + occ + nonsense rollouts)
     referent: str = "object"  # a referent type (referents/<type>.yaml)
     profile: str = "native"  # the exam's profile: native | libero
-    policies: list[str] = field(default_factory=lambda: ["oracle", "random"])  # policies to time (see eval/policies.py)
+    policies: list[str] = field(default_factory=lambda: ["oracle", "random"])  # policies to time (see eval/policies/__init__.py)
     workers: list[int] = field(default_factory=lambda: [1, 2])  # worker counts to time each policy at
 
 
@@ -66,4 +62,4 @@ def bench(options: BenchOptions) -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(main("python bench/eval.py", BenchOptions, bench, doc=__doc__))
+    sys.exit(main("python bench/battery.py", BenchOptions, bench, doc=__doc__))

@@ -44,7 +44,7 @@ def libero_request(observation: dict) -> dict:
 
 
 class RemotePolicy:
-    argument = "HOST:PORT"  # written remote:HOST:PORT (eval/registry.py)
+    argument = "HOST:PORT"  # written remote:HOST:PORT (eval/policies/registry.py)
     needs_images = True
 
     def __init__(self, address: str, keys: str = "dataset", replan: int = 5, timeout: float = 5.0) -> None:

@@ -1,4 +1,4 @@
-"""The battery's report as files: report.json (schema in eval/score.py), report.md (tables) and
+"""The battery's report as files: report.json (schema in eval/score.py's help), report.md (tables) and
 report.html (the same tables with plots: rates with interval bars, a per-slot heat map and
 distance histograms)."""
 

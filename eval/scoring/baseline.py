@@ -3,7 +3,7 @@
 "Chance = 1/k" fits a policy that lands on a random object; the shortcut a confounded policy
 learns (reach the canonical slot) scores what it scores on a given exam, so every report shows
 that measured rate beside its own. It is measured once per exam and set of rollouts
-(eval/battery.py) and cached here, where the offline scorer finds it too.
+(eval/scoring/battery.py) and cached here, where the offline scorer finds it too.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from core.products import ANSWERS_FILE, TRIALS_FILE
 SHORTCUT = "position"  # the reference policy whose rates are the shortcut baseline
 
 
-REPORT_VERSION = 2  # of eval/score.py's report: a baseline scored by another version is not reused
+REPORT_VERSION = 2  # of eval/scoring/score.py's report: a baseline scored by another version is not reused
 
 
 def exam_digest(exam: Exam, salt: str = "") -> str:

@@ -1,7 +1,7 @@
 """LIBERO's own environment, driven from the project's process: the side of `sim=libero` that runs
-in `.venv-libero` (LIBERO's code, its robosuite 1.4.0 and its mujoco), started by eval/libero_sim.py
-as `.venv-libero/bin/python eval/libero_server.py`. It imports numpy and LIBERO only, never the
-project, whose packages live in another environment; scripts/libero_reference.py builds its
+in `.venv-libero` (LIBERO's code, its robosuite 1.4.0 and its mujoco), started by eval/sims/libero.py
+as `.venv-libero/bin/python eval/sims/libero_env/server.py`. It imports numpy and LIBERO only, never the
+project, whose packages live in another environment; eval/sims/libero_env/reference.py builds its
 reference environments with the same functions.
 
 The protocol is frames on stdin/stdout (`read_frame`/`write_frame`): a JSON header and the raw bytes

