@@ -43,8 +43,8 @@ class EvalOptions:
 def check_out(out: Path, overwrite: bool) -> None:
     """Before the policy loads and any rollout runs: `out` must be a folder that can be written
     (as must its parent, where the rollouts are kept), and hold no report unless `overwrite`."""
-    from eval.scoring.report import check_out as check_report_out
     from eval.scoring.battery import REPORT_FILES
+    from eval.scoring.report import check_out as check_report_out
     from jobs.output import check_writable
 
     check_report_out(out, overwrite, REPORT_FILES)
@@ -56,9 +56,9 @@ def evaluate(options: EvalOptions) -> None:
         raise UserError(f"workers must be at least 1, got {options.workers}")
     if options.rows is not None and options.rows < 1:
         raise UserError(f"rows must be at least 1, got {options.rows}")
-    from eval.sims import libero as libero_sim
     from eval.scoring.baseline import exam_digest
     from eval.scoring.battery import kept_rollouts, take  # the simulator stack loads only for valid input
+    from eval.sims import libero as libero_sim
     from eval.sims.rollout import ProfileMismatch
 
     if options.sim not in libero_sim.SIMS:

@@ -39,7 +39,7 @@ from eval.scoring.report import write_reports
 from eval.scoring.score import BASELINE_MEASURED, score
 from eval.sims.libero import versions
 from eval.sims.log import EXAM_KEY, POLICY_KEY, PREDICTION_KEY, SIM_KEY, VERSIONS_KEY, read_logs
-from eval.sims.rollout import OurSim, Runner, Sim
+from eval.sims.rollout import OurSim, Runner, Simulator
 from jobs.partial import Partial
 from jobs.processes import die_with
 
@@ -134,7 +134,7 @@ def take(
     return report, seconds
 
 
-def make_sim(name: str, exam: Exam) -> Sim:
+def make_sim(name: str, exam: Exam) -> Simulator:
     """The simulator `name` (eval/sims/libero.py SIMS) for rollouts of `exam`."""
     if name == OurSim.name:
         return OurSim()

@@ -90,7 +90,7 @@ def check_prediction(predicted: object, size: int) -> tuple[list[float] | None, 
     return [float(v) for v in p], None
 
 
-class Sim(Protocol):
+class Simulator(Protocol):
     """Where a rollout runs: it starts a row, steps an action, says where the hand and the objects
     are, observes as the exam's profile records, and may judge the row's ask itself."""
 
@@ -170,7 +170,7 @@ class Runner:
     read the observation (`wants_observation()` false: it is executing a chunk) is handed one without
     frames, which are then not drawn."""
 
-    def __init__(self, policy: Policy, sim: Sim | None = None) -> None:
+    def __init__(self, policy: Policy, sim: Simulator | None = None) -> None:
         self.policy = policy
         self.sim = sim or OurSim()
 

@@ -191,8 +191,8 @@ def test_bad_input_is_refused_before_any_rollout(
 def test_a_native_exam_or_a_missing_libero_environment_is_refused(
     canonical: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from eval.sims import libero as libero_sim
     from eval.__main__ import EvalOptions, evaluate
+    from eval.sims import libero as libero_sim
     from jobs.cli import main
 
     native = make_dataset(tmp_path / "native", "n=1", "split=exam", "image_size=32", "workers=1")

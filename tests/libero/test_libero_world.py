@@ -25,8 +25,8 @@ from core.rotations import yaw_quat
 from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec
 from core.success import Outcome, contained
 from eval.policies.registry import make
-from eval.scoring.score import swaps_obeyed
 from eval.scoring.battery import take
+from eval.scoring.score import swaps_obeyed
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
 from eval.sims.log import read_logs
 from gen.products import scenes

@@ -26,8 +26,8 @@ from core.exam import FRAME_OBJECTS, NO_SWITCH, SWITCH, ExamError, read
 from core.spec import EpisodeSpec
 from eval.policies import Context, Oracle
 from eval.policies.registry import make
-from eval.scoring.score import score
 from eval.scoring.battery import take
+from eval.scoring.score import score
 from eval.sims.log import LogError
 from helpers import make_dataset, rows_of
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from eval.sims import libero as libero_sim
 from eval.__main__ import EvalOptions, evaluate
+from eval.sims import libero as libero_sim
 from jobs.cli import main
 
 
