@@ -16,7 +16,7 @@ report.json schema (version 2):
       `not recorded` for logs written elsewhere), simulator_versions ({mujoco, robosuite, and for
       `libero` libero: the packages it ran on}; {} where the logs do not say), exam (its label:
       `<referent>-exam/seed<s>/<n>trials`, or for a canonical exam `LIBERO-<Suite> canonical exam: ...`),
-      exam_digest (sha256 of the exam's files, eval/baseline.py
+      exam_digest (sha256 of the exam's files, eval/scoring/baseline.py
       exam_digest: which exam this is, whatever folder holds it), referent, rollouts (those scored),
       exam_rollouts (the exam's rollouts: more than `rollouts` for a partial take, `python -m eval
       rows=N`), trials (those scored)

@@ -43,11 +43,11 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+import referents.registry
 from core import programs, worlds
 from core.demo import DemoScript
 from core.profiles import ARM_JOINTS, GRIPPER_OPEN, JOINT_HIGH, JOINT_LOW, NATIVE
 from core.spec import EpisodeSpec
-from referents import registry
 
 if TYPE_CHECKING:
     from oracle.episode import Demo
@@ -152,7 +152,7 @@ class Oracle(Scripted):
     def reset(self, context: Context) -> None:
         """The demonstration of what the row asks for; on a switch row, the original ask's until the
         switch, then a new plan of the newly named one from where the arm is then."""
-        spec, script = context.spec, registry.demo_of(context.spec.referent)
+        spec, script = context.spec, referents.registry.demo_of(context.spec.referent)
         asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
         if context.switch is None:
             self._actions, self._t = self._actions_for(asked, script, context), 0
@@ -168,11 +168,11 @@ class Position(Scripted):
     def __init__(self, name: str = "position") -> None:
         super().__init__(name)
 
-    def _chosen(self, referent: registry.Referent, context: Context) -> EpisodeSpec:
+    def _chosen(self, referent: referents.registry.Referent, context: Context) -> EpisodeSpec:
         return referent.shortcut(context.spec)
 
     def reset(self, context: Context) -> None:
-        referent = registry.load(context.spec.referent, world=context.spec.sim.world)
+        referent = referents.registry.load(context.spec.referent, world=context.spec.sim.world)
         chosen = self._chosen(referent, context)
         self._actions, self._t = self._actions_for(chosen, programs.perform, context), 0
 
@@ -185,7 +185,7 @@ class NamedPlace(Position):
     def __init__(self) -> None:
         super().__init__("named_place")
 
-    def _chosen(self, referent: registry.Referent, context: Context) -> EpisodeSpec:
+    def _chosen(self, referent: referents.registry.Referent, context: Context) -> EpisodeSpec:
         placed = referent.named_place(context.spec, context.target)
         return referent.shortcut(context.spec) if placed is None else placed
 
