@@ -8,8 +8,8 @@ from core.spec import EpisodeSpec, SceneObject
 from referents.balance import Balance
 from referents.compose import naming_design
 from referents.design import Design
-from referents.features import IDENTITY, Alternative, Feature, object_alternatives
 from referents.schema import ReferentConfig
+from referents.variables import IDENTITY, Alternative, Variable, object_alternatives
 
 CONFOUNDS = ("position",)
 
@@ -21,7 +21,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     present = tuple(sorted(o.attributes["category"] for o in spec.objects))
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
-        return {"co-appearing categories": Feature((present, o.attributes["category"]), IDENTITY)}
+    def extra(o: SceneObject) -> dict[str, Variable]:
+        return {"co-appearing categories": Variable((present, o.attributes["category"]), IDENTITY)}
 
     return object_alternatives(cfg, spec, extra=extra)

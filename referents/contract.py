@@ -29,8 +29,8 @@ from core.spec import EpisodeSpec, TaskSpec
 from referents import destination
 from referents.balance import Balance
 from referents.design import Design
-from referents.features import Alternative, object_alternatives
 from referents.schema import CONFOUNDS, ReferentConfig, ReferentSpecError
+from referents.variables import Alternative, object_alternatives
 
 
 def _the_target(spec: EpisodeSpec) -> str:
@@ -66,7 +66,7 @@ class TypeModule:
     # `demo(skills, spec)`: the oracle's plan, a few lines over the skills of core/demo.py
     demo: DemoScript = programs.perform
     # `alternatives(config, spec) -> [Alternative]`: what the instruction chooses among, for the confound
-    # audit, each with the features that declare their family (referents/features.py)
+    # audit, each with the variables that declare their family (referents/variables.py)
     alternatives: Callable[[ReferentConfig, EpisodeSpec], list[Alternative]] = object_alternatives
     # `answer(spec) -> str`: the id of the right alternative
     answer: Callable[[EpisodeSpec], str] = _the_target

@@ -11,8 +11,8 @@ from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from referents.balance import Balance
 from referents.compose import slug
 from referents.design import Design, Placement
-from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
 from referents.schema import Candidate, ReferentConfig
+from referents.variables import IDENTITY, POSITION, Alternative, Variable, object_alternatives
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -59,10 +59,10 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     carried = spec.object(spec.task.params["object"])
     destinations = [o.id for o in spec.objects if o.kind in {c.kind for c in cfg.role("destination")}]
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
+    def extra(o: SceneObject) -> dict[str, Variable]:
         return {
-            "carried object and destination": Feature((carried.name, o.name), IDENTITY),
-            "carried object slot and slot": Feature((carried.slot, o.slot), POSITION | IDENTITY),
+            "carried object and destination": Variable((carried.name, o.name), IDENTITY),
+            "carried object slot and slot": Variable((carried.slot, o.slot), POSITION | IDENTITY),
         }
 
     return object_alternatives(cfg, spec, destinations, extra)

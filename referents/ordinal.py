@@ -11,8 +11,8 @@ from core.spec import Counterfactual, EpisodeSpec, SceneObject
 from referents import destination
 from referents.balance import Balance
 from referents.design import Design, Placement
-from referents.features import POSITION, Alternative, Feature, object_alternatives
 from referents.schema import ReferentConfig
+from referents.variables import POSITION, Alternative, Variable, object_alternatives
 
 _LAST = "last"
 
@@ -80,17 +80,17 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     place = {o.id: i for i, o in enumerate(row)}
     length = len(row)
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
+    def extra(o: SceneObject) -> dict[str, Variable]:
         p = place[o.id]
         return {
-            "rank from left": Feature(p, POSITION),
-            "rank from right": Feature(length - 1 - p, POSITION),
-            "row length and rank": Feature((length, p), POSITION),
-            "column": Feature(o.slot % columns, POSITION),
+            "rank from left": Variable(p, POSITION),
+            "rank from right": Variable(length - 1 - p, POSITION),
+            "row length and rank": Variable((length, p), POSITION),
+            "column": Variable(o.slot % columns, POSITION),
         }
 
     alts = object_alternatives(cfg, spec, extra=extra)
-    return [Alternative(a.id, f"place {place[a.id] + 1} of {length}", a.slot, a.features) for a in alts]
+    return [Alternative(a.id, f"place {place[a.id] + 1} of {length}", a.slot, a.variables) for a in alts]
 
 
 def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:

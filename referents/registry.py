@@ -28,8 +28,8 @@ from referents import destination
 from referents.balance import Balance
 from referents.contract import TypeModule, code_of
 from referents.design import Design
-from referents.features import Alternative
 from referents.schema import ReferentConfig, ReferentSpecError
+from referents.variables import Alternative
 
 __all__ = [
     "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "carried_by", "demo_of", "load", "of_world", "own_name",

@@ -10,8 +10,8 @@ from __future__ import annotations
 from core.spec import Counterfactual, EpisodeSpec, SceneObject
 from referents.balance import Balance
 from referents.design import Design, Placement
-from referents.features import POSITION, Alternative, Feature, object_alternatives
 from referents.schema import ReferentConfig
+from referents.variables import POSITION, Alternative, Variable, object_alternatives
 
 _SIDES = ("left", "right")
 
@@ -60,15 +60,15 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     def side(o: SceneObject) -> str:
         return "left" if o.pos[1] > anchor.pos[1] else "right"
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
+    def extra(o: SceneObject) -> dict[str, Variable]:
         return {
-            "side": Feature(side(o), POSITION),
-            "anchor and side": Feature((anchor.name, side(o)), POSITION),
-            "anchor slot and side": Feature((anchor.slot, side(o)), POSITION),
+            "side": Variable(side(o), POSITION),
+            "anchor and side": Variable((anchor.name, side(o)), POSITION),
+            "anchor slot and side": Variable((anchor.slot, side(o)), POSITION),
         }
 
     alts = object_alternatives(cfg, spec, [o.id for o in blocks], extra)
-    return [Alternative(a.id, side(spec.object(a.id)), a.slot, a.features) for a in alts]
+    return [Alternative(a.id, side(spec.object(a.id)), a.slot, a.variables) for a in alts]
 
 
 def assets(cfg: ReferentConfig) -> list[tuple[str, int]]:

@@ -12,8 +12,8 @@ from core.spec import Counterfactual, EpisodeSpec, TaskSpec
 from referents.balance import Balance
 from referents.compose import choose_scene
 from referents.design import Design
-from referents.features import Alternative, Feature, object_features
 from referents.schema import ReferentConfig
+from referents.variables import Alternative, Variable, object_variables
 
 
 def validate(cfg: ReferentConfig) -> None:
@@ -52,10 +52,10 @@ def answer(spec: EpisodeSpec) -> str:
 
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     obj = spec.object(spec.target)
-    base = object_features(spec, obj)
+    base = object_variables(spec, obj)
 
-    def crossed(p: str) -> dict[str, Feature]:
+    def crossed(p: str) -> dict[str, Variable]:
         """The program, and every object variable paired with it (same families)."""
-        return {"program": Feature(p), **{f"{k} and program": Feature((f.value, p), f.family) for k, f in base.items()}}
+        return {"program": Variable(p), **{f"{k} and program": Variable((f.value, p), f.family) for k, f in base.items()}}
 
     return [Alternative(p, verb, obj.slot, crossed(p)) for p, verb in cfg.extra["verbs"].items()]

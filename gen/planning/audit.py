@@ -11,7 +11,7 @@ LEAK_MARGIN. Below MIN_EPISODES a plan is too small for any verdict and none is 
 is expected when the options asked for it: `confound=position` for variables of the POSITION
 family, `confound=layout` for both families, a vocabulary restriction (distractor_only, targets)
 for the IDENTITY family; each variable declares its families where the referent makes it
-(referents/features.py).
+(referents/variables.py).
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ import pandas as pd
 
 from core.rates import Rate, wilson
 from core.spec import EpisodeSpec
-from referents.features import IDENTITY, POSITION, Family
 from referents.registry import Referent
+from referents.variables import IDENTITY, POSITION, Family
 
 FOLDS = 5
 LEAK_MARGIN = 0.05
@@ -40,9 +40,9 @@ def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> tuple[pd.DataFra
     for i, spec in enumerate(specs):
         answer = referent.answer(spec)
         for alt in referent.alternatives(spec):
-            for var, feature in alt.features.items():
-                rows.append((i, i % FOLDS, alt.id, var, repr(feature.value), alt.id == answer))
-                families[var] |= feature.family
+            for var, variable in alt.variables.items():
+                rows.append((i, i % FOLDS, alt.id, var, repr(variable.value), alt.id == answer))
+                families[var] |= variable.family
     return pd.DataFrame(rows, columns=["episode", "fold", "alt", "variable", "value", "answer"]), families
 
 

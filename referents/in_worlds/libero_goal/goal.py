@@ -24,8 +24,8 @@ from referents import scenery
 from referents.balance import Balance
 from referents.compose import slug
 from referents.design import Design, Placement
-from referents.features import IDENTITY, POSITION, Alternative, Feature, object_alternatives
 from referents.schema import Candidate, ReferentConfig
+from referents.variables import IDENTITY, POSITION, Alternative, Variable, object_alternatives
 
 CONFOUNDS = ("position", "layout")
 
@@ -201,12 +201,12 @@ def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     places = {named, *_others(cfg, spec.task.program, carried.name if carried else "", named)}
     destinations = [o.id for o in spec.objects if o.name in places]
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
+    def extra(o: SceneObject) -> dict[str, Variable]:
         if carried is None:
             return {}
         return {
-            "carried object and destination": Feature((carried.name, o.name), IDENTITY),
-            "carried object slot and destination slot": Feature((carried.slot, o.slot), POSITION | IDENTITY),
+            "carried object and destination": Variable((carried.name, o.name), IDENTITY),
+            "carried object slot and destination slot": Variable((carried.slot, o.slot), POSITION | IDENTITY),
         }
 
     return object_alternatives(cfg, spec, destinations, extra)

@@ -21,8 +21,8 @@ from core.spec import Counterfactual, EpisodeSpec, SceneObject, TaskSpec
 from referents import scenery
 from referents.balance import Balance
 from referents.design import Design, Placement
-from referents.features import POSITION, Alternative, Feature, object_alternatives
 from referents.schema import Candidate, ReferentConfig
+from referents.variables import POSITION, Alternative, Variable, object_alternatives
 
 CONFOUNDS = ("position", "layout")
 
@@ -169,8 +169,8 @@ def _place_of(cfg: ReferentConfig, obj: SceneObject) -> _Place:
 def alternatives(cfg: ReferentConfig, spec: EpisodeSpec) -> list[Alternative]:
     bowls = [o.id for o in spec.objects if o.kind == _bowl(cfg).kind]
 
-    def extra(o: SceneObject) -> dict[str, Feature]:
-        return {"place": Feature(_place_of(cfg, o).region, POSITION)}
+    def extra(o: SceneObject) -> dict[str, Variable]:
+        return {"place": Variable(_place_of(cfg, o).region, POSITION)}
 
     return object_alternatives(cfg, spec, bowls, extra)
 
