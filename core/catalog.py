@@ -9,9 +9,11 @@ planning stays pure: no simulator is imported to know where an object rests or h
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from core.furniture import Drawer, Knob, Shelf, Spot
+
+Piece = TypeVar("Piece", Spot, Drawer, Knob, Shelf)
 
 # Named colors an instruction may use, as RGBA.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -77,12 +79,17 @@ class Kind:
         as somewhere to put things."""
         return self.model == SITE
 
+    def part(self, piece: type[Piece]) -> Piece:
+        """This kind's `piece` (its Spot, Drawer, Knob or Shelf), or a ValueError saying it has none."""
+        found = {Spot: self.spot, Drawer: self.drawer, Knob: self.knob, Shelf: self.shelf}[piece]
+        if found is None:
+            raise ValueError(f"{self.name} has no {piece.__name__.lower()}")
+        return found
+
     @property
     def anchor(self) -> str:
         """Where a place on a fixture is, as another simulator is asked to follow it (`Spot.anchor`)."""
-        if self.spot is None:
-            raise ValueError(f"{self.name} is not a place on a fixture")
-        return self.spot.anchor
+        return self.part(Spot).anchor
 
     @property
     def noun(self) -> str:

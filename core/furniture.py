@@ -2,7 +2,7 @@
 it is a part of, each owning the thresholds LIBERO judges it by (as LIBERO's articulated objects
 own their open and turn-on ranges): a cabinet's `Drawer`, the stove's `Knob`, the wine rack's
 sloping `Shelf`. A kind (core/catalog.py) carries them as typed fields, so the success predicates
-(core/success.py) and the skills (oracle/skills.py) read them by name.
+(core/success.py) and the skills (oracle/furniture.py) read them by name (`Kind.part`).
 """
 
 from __future__ import annotations
@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from core.rotations import X_AXIS, turned
 
 
 @dataclass(frozen=True)
@@ -50,16 +52,16 @@ class Drawer:
 
 @dataclass(frozen=True)
 class Knob:
-    """A stove's knob, its place a point `radius` from its axis (Spot.offset). On from `turn_on`
+    """A stove's knob, its place a point on it off its axis (its `Spot.offset`). On from `turn_on`
     radians: LIBERO's flat stove (it starts at 0 and turns one way only)."""
 
-    radius: float
     turn_on: float = 0.5
 
-    def on(self, start: tuple[float, ...], end: tuple[float, ...]) -> bool:
-        """A point `radius` from the axis, turned by an angle a, moves 2 radius sin(a / 2): the chord."""
+    def on(self, start: tuple[float, ...], end: tuple[float, ...], radius: float) -> bool:
+        """Whether the point `radius` from the axis went from `start` to `end` along an arc of
+        `turn_on` or more: turned by an angle a, it moves 2 radius sin(a / 2), the chord."""
         chord = float(np.linalg.norm(np.subtract(end, start)))
-        return chord >= 2 * self.radius * np.sin(self.turn_on / 2)
+        return chord >= 2 * radius * np.sin(self.turn_on / 2)
 
 
 @dataclass(frozen=True)
@@ -73,6 +75,10 @@ class Shelf:
     tilt: float
     lay: tuple[float, float]
     rise: float = 0.10
+
+    def turn(self) -> np.ndarray:
+        """The site's turn against the fixture it is on: `tilt` about its x."""
+        return turned(X_AXIS, self.tilt)
 
     def holds(self, delta: np.ndarray) -> bool:
         """Whether a thing `delta` from the site (in the site's frame, as LIBERO multiplies it) is on it."""

@@ -145,7 +145,7 @@ KINDS: dict[str, Kind] = {
             (0.068, 0.068, 0.05),
             0.0,
             spot=Spot(body="flat_stove_1_button", offset=(0.0, KNOB_RADIUS, 0.0), goal_name="flat_stove_1"),
-            knob=Knob(KNOB_RADIUS),
+            knob=Knob(),
         ),
         # the table's region in front of the stove (LIBERO-Goal's `main_table_stove_front_region`, a
         # site LIBERO adds to its table body): LIBERO's `On(x, region)` is x's origin over its box,

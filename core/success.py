@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core import worlds
-from core.rotations import X_AXIS, quat_matrix, turned, unit, yaw_matrix, yaw_quat
+from core.furniture import Drawer, Knob, Shelf, Spot
+from core.rotations import quat_matrix, unit, yaw_matrix, yaw_quat
 from core.spec import EpisodeSpec
 
 PUSH_DIRECTION = (1.0, 0.0)  # away from the robot, along +x
@@ -95,12 +96,9 @@ def _on_tilted(spec: EpisodeSpec, outcome: Outcome, thing: str, place: str) -> b
     offset multiplied by the site's matrix itself, as LIBERO multiplies it (the fixture stands
     where its world puts it)."""
     kind = worlds.kind(spec.object(place).kind, spec.sim.world)
-    assert kind.shelf is not None and kind.spot is not None
-    site = kind.spot.site
+    shelf, site = kind.part(Shelf), kind.part(Spot).site
     yaw = next(p.yaw for p in worlds.world(spec.sim.world).fixtures if site.startswith(f"{p.name}_"))
-    return kind.shelf.holds(
-        yaw_matrix(yaw) @ turned(X_AXIS, kind.shelf.tilt) @ np.subtract(outcome.end[thing], outcome.end[place])
-    )
+    return shelf.holds(yaw_matrix(yaw) @ shelf.turn() @ np.subtract(outcome.end[thing], outcome.end[place]))
 
 
 def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, floor: float) -> bool:
@@ -137,17 +135,13 @@ def pushed_to(spec: EpisodeSpec, outcome: Outcome, region: str) -> bool:
 
 
 def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
-    part = worlds.kind(spec.object(drawer).kind, spec.sim.world).drawer
-    if part is None:
-        raise ValueError(f"{spec.object(drawer).kind} is not a drawer")
-    return part.opened(outcome.start[drawer], outcome.end[drawer])
+    return worlds.kind(spec.object(drawer).kind, spec.sim.world).part(Drawer).opened(outcome.start[drawer], outcome.end[drawer])
 
 
 def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:
-    part = worlds.kind(spec.object(knob).kind, spec.sim.world).knob
-    if part is None:
-        raise ValueError(f"{spec.object(knob).kind} is not a knob")
-    return part.on(outcome.start[knob], outcome.end[knob])
+    kind = worlds.kind(spec.object(knob).kind, spec.sim.world)
+    radius = float(np.hypot(*kind.part(Spot).offset[:2]))
+    return kind.part(Knob).on(outcome.start[knob], outcome.end[knob], radius)
 
 
 def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:

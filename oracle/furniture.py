@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.furniture import Drawer, Shelf
-from core.rotations import X_AXIS, facing, turned, yaw_matrix
+from core.rotations import facing, turned, yaw_matrix
 from oracle.clearance import Clearance
 from oracle.ik import DOWN, grasp_yaw
 
@@ -29,22 +29,10 @@ LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
 class FurnitureSkills(Clearance):
     """The motions of the furniture's parts, over the scene of one episode."""
 
-    def _drawer(self, drawer_id: str) -> Drawer:
-        drawer = self._kind(drawer_id).drawer
-        if drawer is None:
-            raise ValueError(f"{self._kind(drawer_id).name} is not a drawer")
-        return drawer
-
-    def _shelf(self, shelf_id: str) -> Shelf:
-        shelf = self._kind(shelf_id).shelf
-        if shelf is None:
-            raise ValueError(f"{self._kind(shelf_id).name} is not a sloping shelf")
-        return shelf
-
     def _shelf_axes(self, shelf_id: str) -> np.ndarray:
         """A sloping shelf's site axes in the world (columns): along the shelf, out of it (negated),
         up its slope."""
-        return self.scene.body_pose(shelf_id)[1] @ turned(X_AXIS, self._shelf(shelf_id).tilt)
+        return self.scene.body_pose(shelf_id)[1] @ self._kind(shelf_id).part(Shelf).turn()
 
     def _lay(self, shelf_id: str) -> None:
         """Lay the held object along a sloping shelf (the wine rack's), its top uphill: over the
@@ -52,7 +40,7 @@ class FurnitureSkills(Clearance):
         go, and back off out of it."""
         axes, grip = self._shelf_axes(shelf_id), self.held[1]
         up, out = axes[:, 2], -axes[:, 1]
-        along, rise = self._shelf(shelf_id).lay
+        along, rise = self._kind(shelf_id).part(Shelf).lay
         radius = min(self._kind(self.held[0]).size[:2]) / 2
         bottom = self.scene.object_pos(shelf_id) + along * axes[:, 0] + rise * up + (radius + LAY_GAP) * out
         downhill = -np.append(up[:2] / np.linalg.norm(up[:2]), 0.0)
@@ -99,12 +87,12 @@ class FurnitureSkills(Clearance):
 
     def _pull_direction(self, drawer_id: str) -> np.ndarray:
         """The way a drawer slides out, in the world."""
-        return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._drawer(drawer_id).pull)
+        return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._kind(drawer_id).part(Drawer).pull)
 
     def pull_open(self, drawer_id: str, travel: float = DRAWER_PULL) -> None:
         """Take the drawer's handle bar from the front, the hand level and its fingers closing up and
         down on the bar, and pull it `travel` out along its slide; let go and back off, up and out."""
-        drawer = self._drawer(drawer_id)
+        drawer = self._kind(drawer_id).part(Drawer)
         site, rot = self.scene.object_pos(drawer_id), self.scene.body_pose(drawer_id)[1]
         handle = site + rot @ np.asarray(drawer.handle)
         out = self._pull_direction(drawer_id)

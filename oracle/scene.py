@@ -25,6 +25,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from core import catalog, profiles, worlds
+from core.furniture import Spot
 from core.profiles import AGENTVIEW, NATIVE, Profile
 from core.rotations import IDENTITY, yaw_quat
 from core.spec import FAST, EpisodeSpec, SceneObject
@@ -280,8 +281,7 @@ class Scene:
         for kind_name, count in self.assets:
             kind = self.world.kind(kind_name)
             if kind.is_site:  # the fixture's site, or a point on its body: where it is, the scene's positions read
-                spot = kind.spot
-                assert spot is not None
+                spot = kind.part(Spot)
                 site = m.site(spot.site).id if spot.site else -1
                 body_id = int(m.site_bodyid[site]) if site >= 0 else m.body(spot.body).id
                 offset = None if site >= 0 else np.asarray(spot.offset, float)
