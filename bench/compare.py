@@ -118,7 +118,7 @@ def floor(dataset: Path) -> float:
 
     specs = [EpisodeSpec.from_json(s) for s in scenes.read(dataset)["spec"]]
     scene = scene_for(specs[0].assets)
-    ik = ArmIK(np.asarray(specs[0].sim.robot_home))
+    ik = ArmIK(np.asarray(specs[0].setup.robot_home))
     states = [demonstrate(scene, ik, s, demo_of(s.referent)).states for s in specs]  # not timed
     cams = Cameras(scene, 128, NATIVE.camera_names)
     start = time.perf_counter()

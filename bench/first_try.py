@@ -44,9 +44,9 @@ def _first_try(cfg: GenConfig, index: int) -> tuple[int, bool, str, int]:
         planned = plan_and_audit(cfg)
         share = planned.only
         _producers["planned"] = planned
-        _producers["producer"] = Producer(share.referent, share.sim)
+        _producers["producer"] = Producer(share.referent, share.setup)
     planned, producer = _producers["planned"], _producers["producer"]
-    spec = realize(producer.referent, planned.designs[index], index, cfg.seed, producer.sim, 0, cfg.split)
+    spec = realize(producer.referent, planned.designs[index], index, cfg.seed, producer.setup, 0, cfg.split)
     demo = demonstrate(producer.scene, producer.ik, spec, producer.referent.demo)
     return index, demo.success, demo.failure, len(demo.actions)
 

@@ -23,7 +23,7 @@ import gen.products.produce as produce
 from core import worlds
 from gen.config import GenConfig, load_referent, validate
 from gen.lerobot.writer import LeRobotWriter, Recording
-from gen.planning.plan import designs, sim_settings
+from gen.planning.plan import configured_setup, designs
 from jobs.cli import main
 from oracle.render import Cameras
 
@@ -70,14 +70,14 @@ def run(cfg: GenConfig) -> float:
     for clock in CLOCKS:
         CLOCKS[clock] = 0.0
     ref = load_referent(cfg)
-    sim, n, size = sim_settings(cfg, worlds.world(ref.config.world)), cfg.n, cfg.image_size
-    producer = produce.Producer(ref, sim)
+    setup, n, size = configured_setup(cfg, worlds.world(ref.config.world)), cfg.n, cfg.image_size
+    producer = produce.Producer(ref, setup)
     producer.demonstrate(designs(ref, 1, seed=1)[0], 0, 1, max_attempts=10)  # warm-up: JIT caches, first scene
     plan = designs(ref, n, seed=0)
     oracle = record = write = 0.0
     first_try = attempts = frames = 0
-    features = sim.interface
-    writer = LeRobotWriter(Path(cfg.out), Recording(sim.fps, size, sim.cameras, features.state_names, features.action_names))
+    features = setup.interface
+    writer = LeRobotWriter(Path(cfg.out), Recording(setup.fps, size, setup.cameras, features.state_names, features.action_names))
     for i, design in enumerate(plan):
         t0 = time.perf_counter()
         demo, failures = producer.demonstrate(design, i, 0, max_attempts=10)
@@ -104,7 +104,7 @@ def run(cfg: GenConfig) -> float:
     for name, secs in (("physics+oracle", physics), ("rendering", render), ("writing", writing), ("total", total)):
         print(f"{name:<16}{secs / n:>10.3f}{secs / total:>8.1%}")
     print(f"throughput: {frames / total:.1f} frames/s, {total / n:.2f} s/episode (1 process)")
-    print(f"rendering alone: {render / frames / len(sim.cameras) * 1000:.1f} ms per camera frame")
+    print(f"rendering alone: {render / frames / len(setup.cameras) * 1000:.1f} ms per camera frame")
     return total / n
 
 

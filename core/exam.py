@@ -20,9 +20,9 @@ from answers.parquet and it cannot cheat without knowing.
 Columns of trials.parquet (the policy's side):
   row (int, unique), trial (int: rollouts of a trial share its scene), instruction (str),
   occluded (bool: the cameras are blanked), scene (JSON: the episode spec with the answer
-  withheld — objects with id, kind, name, slot, pos, yaw, attributes; the inventory; the sim
-  settings and profile; target, instruction, counterfactuals and task left empty; see
-  core/spec.py), initial_state (list[float]: MuJoCo mjSTATE_INTEGRATION of the compiled scene),
+  withheld — objects with id, kind, name, slot, pos, yaw, attributes; the inventory; the setup
+  (key `sim`: world, profile, cameras, frame size and rate); target, instruction, counterfactuals
+  and task left empty; see core/spec.py), initial_state (list[float]: MuJoCo mjSTATE_INTEGRATION of the compiled scene),
   max_steps (int: rollout horizon at the exam's fps; a switch row's is its switch step plus the
   trial's horizon, which counts from the switch), and in exams with switch rows switch (JSON:
   {"step": s, "instruction": ...} on a switch row, the instruction the policy is shown from step s

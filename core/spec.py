@@ -75,8 +75,9 @@ LOOKS = (FAST, FULL)
 
 
 @dataclass(frozen=True)
-class SimSettings:
-    """Everything besides the objects that determines the simulation and its recording."""
+class Setup:
+    """Everything besides the objects that determines the simulation and its recording: the world,
+    the robot's home, the profile recorded, cameras, frame size and rate, the look."""
 
     image_size: int = 128
     fps: int = 20
@@ -118,7 +119,7 @@ class EpisodeSpec:
     counterfactuals: tuple[Counterfactual, ...]
     assets: tuple[tuple[str, int], ...]
     task: TaskSpec = TaskSpec()
-    sim: SimSettings = SimSettings()
+    setup: Setup = Setup()  # serialized under its first name, "sim" (the spec's JSON and hash are unchanged)
     attempt: int = 0
     split: str = "train"
     version: int = SPEC_VERSION
@@ -136,17 +137,18 @@ class EpisodeSpec:
         raise KeyError(f"no object {object_id!r} in episode {self.index}")
 
     def public(self) -> EpisodeSpec:
-        """The scene alone, as a policy may see it: objects, poses, inventory and sim settings,
+        """The scene alone, as a policy may see it: objects, poses, inventory and setup,
         with the answer (target, instruction, counterfactuals, task) withheld."""
         return replace(self, target="", instruction="", template="", counterfactuals=(), task=TaskSpec(program="", params={}))
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
-        if self.sim.profile == NATIVE.name:  # specs of the native profile keep the JSON (and hash) they always had
+        d["sim"] = d.pop("setup")
+        if self.setup.profile == NATIVE.name:  # specs of the native profile keep the JSON (and hash) they always had
             del d["sim"]["profile"]
-        if self.sim.world == "native":  # and so do those of the native world
+        if self.setup.world == "native":  # and so do those of the native world
             del d["sim"]["world"]
-        if self.sim.look == FAST:  # and those drawn with the fast look, which is all there was before `look`
+        if self.setup.look == FAST:  # and those drawn with the fast look, which is all there was before `look`
             del d["sim"]["look"]
         return d
 
@@ -178,9 +180,9 @@ class EpisodeSpec:
         orientation) and the robot's starting joints (`robot`: arm and finger joint positions, in
         the model's joint order), so the episode can be rebuilt in the world's own simulator."""
         objects = [{**asdict(o), "pos": list(o.pos)} for o in self.objects]
-        if self.sim.world == "native":
+        if self.setup.world == "native":
             return {"objects": objects}
-        world, seen = worlds.world(self.sim.world), {}
+        world, seen = worlds.world(self.setup.world), {}
         for record, obj in zip(objects, self.objects):
             seen[obj.kind] = seen.get(obj.kind, -1) + 1
             record["instance"] = world.body_name(obj.kind, seen[obj.kind])
@@ -194,7 +196,7 @@ class EpisodeSpec:
             "world": world.name,
             "objects": objects,
             "fixtures": fixtures,
-            "robot": {"arm": list(self.sim.robot_home), "fingers": [fingers, -fingers]},
+            "robot": {"arm": list(self.setup.robot_home), "fingers": [fingers, -fingers]},
         }
 
     @classmethod
@@ -228,7 +230,7 @@ class EpisodeSpec:
                 ),
                 assets=tuple((str(k), int(n)) for k, n in d["assets"]),
                 task=TaskSpec(**d["task"]),
-                sim=SimSettings(
+                setup=Setup(
                     image_size=int(d["sim"]["image_size"]),
                     fps=int(d["sim"]["fps"]),
                     cameras=tuple(d["sim"]["cameras"]),

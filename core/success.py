@@ -78,10 +78,10 @@ def pushed(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
 
 def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     carried = spec.task.params["object"]
-    dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    dest = worlds.kind(spec.object(destination).kind, spec.setup.world)
     if dest.shelf is not None:  # what lies on a sloping shelf is judged as LIBERO judges it
         return _on_tilted(spec, outcome, carried, destination)
-    obj = worlds.kind(spec.object(carried).kind, spec.sim.world)
+    obj = worlds.kind(spec.object(carried).kind, spec.setup.world)
     d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
     inside = bool(np.all(np.abs(o_end[:2] - d_end[:2]) <= dest.inner))
     dest_top = d_end[2] - dest.bottom + dest.height
@@ -95,9 +95,9 @@ def _on_tilted(spec: EpisodeSpec, outcome: Outcome, thing: str, place: str) -> b
     `under`): `thing`'s origin within the site's box and up to `Shelf.rise` over its face, the
     offset multiplied by the site's matrix itself, as LIBERO multiplies it (the fixture stands
     where its world puts it)."""
-    kind = worlds.kind(spec.object(place).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(place).kind, spec.setup.world)
     shelf, site = kind.part(Shelf), kind.part(Spot).site
-    yaw = next(p.yaw for p in worlds.world(spec.sim.world).fixtures if site.startswith(f"{p.name}_"))
+    yaw = next(p.yaw for p in worlds.world(spec.setup.world).fixtures if site.startswith(f"{p.name}_"))
     return shelf.holds(yaw_matrix(yaw) @ shelf.turn() @ np.subtract(outcome.end[thing], outcome.end[place]))
 
 
@@ -107,7 +107,7 @@ def _in_box(spec: EpisodeSpec, outcome: Outcome, thing: str, container: str, flo
     puts its region site's: the offset turned with it, the extents |R half| along the world's axes
     (R the site's orientation, `Kind.contain_quat` turned as the container turned)."""
     placed = spec.object(container)
-    kind = worlds.kind(placed.kind, spec.sim.world)
+    kind = worlds.kind(placed.kind, spec.setup.world)
     if kind.contain is None:
         raise ValueError(f"{kind.name} is not a container (no contain box)")
     offset, half = (np.asarray(v) for v in kind.contain)
@@ -135,11 +135,11 @@ def pushed_to(spec: EpisodeSpec, outcome: Outcome, region: str) -> bool:
 
 
 def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
-    return worlds.kind(spec.object(drawer).kind, spec.sim.world).part(Drawer).opened(outcome.start[drawer], outcome.end[drawer])
+    return worlds.kind(spec.object(drawer).kind, spec.setup.world).part(Drawer).opened(outcome.start[drawer], outcome.end[drawer])
 
 
 def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:
-    kind = worlds.kind(spec.object(knob).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(knob).kind, spec.setup.world)
     radius = float(np.hypot(*kind.part(Spot).offset[:2]))
     return kind.part(Knob).on(outcome.start[knob], outcome.end[knob], radius)
 
@@ -147,8 +147,8 @@ def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:
 def on(spec: EpisodeSpec, outcome: Outcome, target: str) -> bool:
     """LIBERO's `On(target, destination)` (envs/object_states `check_ontop`), from positions."""
     destination = spec.task.params["destination"]
-    dest = worlds.kind(spec.object(destination).kind, spec.sim.world)
-    carried = worlds.kind(spec.object(target).kind, spec.sim.world)
+    dest = worlds.kind(spec.object(destination).kind, spec.setup.world)
+    carried = worlds.kind(spec.object(target).kind, spec.setup.world)
     t_end, d_end = np.asarray(outcome.end[target]), np.asarray(outcome.end[destination])
     near = float(np.hypot(*(t_end[:2] - d_end[:2]))) < ON_RADIUS
     resting = t_end[2] - carried.bottom <= d_end[2] - dest.bottom + dest.height + PLACE_MAX_HOVER

@@ -65,17 +65,17 @@ class ExamEnv(gym.Env):
             self.row = match.iloc[0]
         self.episode = EpisodeSpec.from_json(self.row["spec"])
         self.render_mode = render_mode
-        size = self.episode.sim.image_size
-        self.features = features = self.episode.sim.interface
+        size = self.episode.setup.image_size
+        self.features = features = self.episode.setup.interface
         self.observation_space = spaces.Dict(
             {
-                **{features.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.sim.cameras},
+                **{features.image_key(c): spaces.Box(0, 255, (size, size, 3), np.uint8) for c in self.episode.setup.cameras},
                 STATE_KEY: spaces.Box(-np.inf, np.inf, (features.state_size,), np.float32),
             }
         )
         self.action_space = spaces.Box(np.array(features.action_low, np.float32), np.array(features.action_high, np.float32))
         self.scene = spec_scene(self.episode)
-        self.cameras = Cameras(self.scene, size, self.episode.sim.cameras)
+        self.cameras = Cameras(self.scene, size, self.episode.setup.cameras)
         self._t = 0
         self._start: dict = {}
 
@@ -120,7 +120,7 @@ class ExamEnv(gym.Env):
         return self._obs(), float(done), False, self._t >= int(self.row["max_steps"]), info
 
     def render(self) -> np.ndarray:
-        return self.cameras.render()[self.episode.sim.cameras[0]].copy()
+        return self.cameras.render()[self.episode.setup.cameras[0]].copy()
 
     def close(self) -> None:
         self.cameras.close()

@@ -43,9 +43,9 @@ def verify(root: Path, sample: int = 3) -> list[int]:
     for ep in chosen:
         rec = records.iloc[ep]
         spec = EpisodeSpec.from_json(rec["spec"])
-        key = (spec.assets, spec.sim)
+        key = (spec.assets, spec.setup)
         if key not in producers:
-            producers[key] = Producer(None, spec.sim, assets=spec.assets)
+            producers[key] = Producer(None, spec.setup, assets=spec.assets)
         producer = producers[key]
         demo = demonstrate(producer.scene, producer.ik, spec, registry.demo_of(spec.referent))
         rows = data[data.episode_index == ep].sort_values("frame_index")

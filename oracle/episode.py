@@ -56,20 +56,20 @@ def demonstrate(
     if state is not None:
         scene.set_physics_state(state)
     for _ in range(settle):
-        scene.step(scene.interface.hold_action(spec.sim.robot_home))
+        scene.step(scene.interface.hold_action(spec.setup.robot_home))
     start = scene.positions()
     for action in prefix:
         scene.step(np.asarray(action))
     skills = Skills(scene, ik, spec)
     if len(prefix):
-        skills.reseed = np.asarray(spec.sim.robot_home, float)
+        skills.reseed = np.asarray(spec.setup.robot_home, float)
         skills.rise()  # a changed course leaves from above the objects, not through them
     try:
         script(skills, spec)
     except IKError as exc:
         return Demo(
             spec,
-            np.asarray(skills.actions, np.float32).reshape(-1, spec.sim.interface.action_size),
+            np.asarray(skills.actions, np.float32).reshape(-1, spec.setup.interface.action_size),
             np.asarray(skills.states),
             None,
             False,

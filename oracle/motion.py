@@ -41,7 +41,7 @@ class Motion:
         self.ik = ik
         self.spec = spec
         self.limits = limits
-        self.dt = 1.0 / spec.sim.fps
+        self.dt = 1.0 / spec.setup.fps
         self.q = scene.data.qpos[scene.arm_qpos].copy()  # where the arm is: the home pose, or a recorded start
         self.yaw = 0.0
         self.facing: np.ndarray | None = None  # the hand's orientation when it does not point down (oracle/ik.py facing)

@@ -305,8 +305,8 @@ class Scene:
         """Put the robot at home and the episode's objects at their poses; park the rest."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
-        self.substeps = int(round(1.0 / (spec.sim.fps * m.opt.timestep)))
-        home, world = np.asarray(spec.sim.robot_home), self.world
+        self.substeps = int(round(1.0 / (spec.setup.fps * m.opt.timestep)))
+        home, world = np.asarray(spec.setup.robot_home), self.world
         d.qpos[self.arm_qpos] = home
         d.qpos[self.finger_qpos] = (world.finger_home, -world.finger_home)
         d.ctrl[:7] = home if self.interface.controller == NATIVE.controller else 0.0  # servo targets, or torques
@@ -353,15 +353,15 @@ class Scene:
     def settle(self, spec: EpisodeSpec) -> None:
         """The actions holding the robot that the profile's own environment runs before a policy
         acts (lerobot's LIBERO env: 10; none natively): an exam rollout's first observation follows them."""
-        features = spec.sim.interface
+        features = spec.setup.interface
         for _ in range(features.settle_steps):
-            self.step(features.hold_action(spec.sim.robot_home))
+            self.step(features.hold_action(spec.setup.robot_home))
 
     def settled(self, spec: EpisodeSpec) -> dict[str, list] | None:
         """Settle, then where the end effector and every object stand: a rollout's step 0 when
         its loop logs from the observation `reset()` returns (exam answers' `settled_start`);
         None where the profile has no settle steps (`reset()` leaves the initial state)."""
-        if not spec.sim.interface.settle_steps:
+        if not spec.setup.interface.settle_steps:
             return None
         self.settle(spec)
         return {"ee": [float(v) for v in self.ee_pos()], "objects": {k: list(v) for k, v in self.positions().items()}}
@@ -560,4 +560,4 @@ def scene_for(assets: tuple[tuple[str, int], ...], profile: str = NATIVE.name, w
 
 def spec_scene(spec: EpisodeSpec) -> Scene:
     """The compiled scene an episode plays in, drawn as its settings say."""
-    return scene_for(spec.assets, spec.sim.profile, spec.sim.world, spec.sim.look)
+    return scene_for(spec.assets, spec.setup.profile, spec.setup.world, spec.setup.look)

@@ -255,6 +255,8 @@ def load(
         code.validate(config)
     except ReferentSpecError as exc:
         raise _held_out(config, exc) from None
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:  # a field its validate did not foresee
+        raise ReferentSpecError(f"{path}: a field of type {config.type} is malformed ({type(exc).__name__}: {exc})") from None
     stray = config.unknown_words(tuple(code.words(config)))
     if stray is not None:
         raise stray

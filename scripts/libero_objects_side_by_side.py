@@ -61,7 +61,7 @@ def our_frames(
     a revision before looks drew them (None)."""
     from core import libero, worlds
     from core.profiles import LIBERO
-    from gen.planning.plan import default_sim
+    from gen.planning.plan import default_setup
     from oracle.render import Cameras
     from oracle.scene import scene_for
     from referents import registry
@@ -73,7 +73,7 @@ def our_frames(
         for name, *pose in theirs[f"{task}-{state}-fixtures"].tolist():  # LIBERO draws these at each reset
             body = scene.model.body(f"{name}_main").id
             scene.model.body_pos[body], scene.model.body_quat[body] = pose[:3], pose[3:]
-        _load(scene, referent, world, libero.tasks(world.suite)[task], state, default_sim(referent))
+        _load(scene, referent, world, libero.tasks(world.suite)[task], state, default_setup(referent))
         out |= {f"{task}-{state}-{c}": f.copy() for c, f in cameras.render().items()}
         if labels:
             out |= {f"{task}-{state}-{c}-labels": f for c, f in cameras.labels().items()}
@@ -81,7 +81,7 @@ def our_frames(
     return out
 
 
-def _load(scene, referent, world, task: str, state: int, sim) -> None:  # noqa: ANN001
+def _load(scene, referent, world, task: str, state: int, setup) -> None:  # noqa: ANN001
     """gen.canonical's load_state as the running revision has it: of a suite (now), or of a
     referent and a world (revisions before LIBERO-PRO's suites)."""
     import inspect
@@ -90,9 +90,9 @@ def _load(scene, referent, world, task: str, state: int, sim) -> None:  # noqa: 
 
     if "suite" in inspect.signature(canonical.load_state).parameters:
         suite = canonical.suite_of(canonical.CanonicalOptions(world=world.name))
-        canonical.load_state(scene, suite, task, state, sim)
+        canonical.load_state(scene, suite, task, state, setup)
     else:
-        canonical.load_state(scene, referent, world, task, state, sim)
+        canonical.load_state(scene, referent, world, task, state, setup)
 
 
 def _before(revision: str, world: str, cases: list[list[int]], theirs: Path, tmp: Path) -> dict:

@@ -18,12 +18,12 @@ import pandas as pd
 from core import libero, programs
 from core.exam import FACES, Exam, read
 from core.profiles import LIBERO, NATIVE
-from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
+from core.spec import FAST, EpisodeSpec, SceneObject, Setup
 from core.worlds import World
 from eval.sims.libero import in_liberos
 from eval.sims.libero_env.reference import named, object_differences  # the same readout in the tests and the pictures in docs/
 from gen.config import parse
-from gen.planning.plan import world_sim
+from gen.planning.plan import world_setup
 from gen.products.canonical import CanonicalOptions, Suite, load_state, suite_of
 from gen.products.run import generate
 from jobs.lock import held
@@ -90,12 +90,12 @@ class Pictures:
         assert excess <= 0, f"{name} in {camera} at {where}: {figure:.1f}/255 inside its pixels, {excess:.1f} over its bound"
 
 
-def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, sim: SimSettings) -> list[str]:
+def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, setup: Setup) -> list[str]:
     """Our scene in a LIBERO task's initial state with no design of it: each object under its LIBERO
     instance name, every joint set by name from LIBERO's state vector; returns the objects' ids."""
     problem = suite.problem(task)
     objects = tuple(SceneObject(instance, kind, kind, 0, (0.0, 0.0, 1.0)) for instance, kind in problem.objects.items())
-    scene.reset(EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), suite.inventory(), sim=sim))
+    scene.reset(EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), suite.inventory(), setup=setup))
     scene.set_joints(*libero.split_state(libero.initial_states(suite.name, task)[state], problem))
     return [o.id for o in objects]
 
@@ -118,8 +118,8 @@ def initial_state_pictures(
     if key not in _LIBEROS_RENDERS:
         _LIBEROS_RENDERS[key] = liberos_own("render", request, tmp_path / f"{suite}.npz")
     theirs = np.load(_LIBEROS_RENDERS[key], allow_pickle=True)
-    sim = world_sim(chosen.world, look=look)
-    scene = scene_for(chosen.inventory(), sim.profile, chosen.world.name, look)
+    setup = world_setup(chosen.world, look=look)
+    scene = scene_for(chosen.inventory(), setup.profile, chosen.world.name, look)
     cameras, m = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), scene.model
     kept = {f.name: (m.body(f"{f.name}_main").id,) for f in chosen.world.fixtures}
     kept = {name: (b, m.body_pos[b].copy(), m.body_quat[b].copy()) for name, (b,) in kept.items()}
@@ -130,9 +130,9 @@ def initial_state_pictures(
                 body = m.body(f"{name}_main").id
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
             if names[t] in chosen.tasks:
-                ids = [o.id for o in load_state(scene, chosen, names[t], s, sim).objects]
+                ids = [o.id for o in load_state(scene, chosen, names[t], s, setup).objects]
             else:  # a task our skills cannot do (LIBERO-Goal's wine bottle's): its objects under LIBERO's names
-                ids = _load_by_name(scene, chosen, names[t], s, sim)
+                ids = _load_by_name(scene, chosen, names[t], s, setup)
             if joints:
                 scene.set_joints({j: np.array([v]) for j, v in joints.items()}, {j: np.zeros(1) for j in joints})
             pictures.compare(cameras, theirs, f"{t}-{s}", f"{suite} task {t} state {s}")

@@ -3,7 +3,7 @@ its mount, the cameras, the object models a scene can hold, and where objects re
 success predicates read its objects' geometry (core/success.py).
 
 One module per world (`core/worlds/<name>.py`), each holding plain data: the episode spec names
-its world (`SimSettings.world`), referents plan within the world's objects and regions, the
+its world (`Setup.world`), referents plan within the world's objects and regions, the
 oracle builds the world's scene from this description (oracle/scene.py), and the writer, exam
 and battery never ask which world it is. `native` is this project's own scene; the LIBERO
 worlds are LIBERO's scenes as its BDDL problems define them, built from LIBERO's assets

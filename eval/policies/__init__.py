@@ -117,12 +117,12 @@ class Scripted:
             return None
         spec, target = self._heading
         where = np.asarray([spec.object(target).pos])
-        return worlds.world(spec.sim.world).agentview.project(where, spec.sim.image_size, spec.sim.interface.mirrored)[0]
+        return worlds.world(spec.setup.world).agentview.project(where, spec.setup.image_size, spec.setup.interface.mirrored)[0]
 
     def _demo(self, spec: EpisodeSpec, demo: DemoScript, context: Context) -> Demo:
         """The demonstration from where the rollout will start: the trial's initial state after
         the profile's settle steps (its `states`: the physics state before each action)."""
-        return self._demonstrate(spec, demo, context.initial_state, spec.sim.interface.settle_steps)
+        return self._demonstrate(spec, demo, context.initial_state, spec.setup.interface.settle_steps)
 
     def _demonstrate(
         self, spec: EpisodeSpec, demo: DemoScript, state: np.ndarray | None, settle: int, prefix: Sequence[np.ndarray] = ()
@@ -132,9 +132,9 @@ class Scripted:
         from oracle.scene import Scene
 
         # a private scene: the runner's stays untouched
-        key = (spec.assets, spec.sim.profile, spec.sim.world)
+        key = (spec.assets, spec.setup.profile, spec.setup.world)
         if key not in self._planner:
-            self._planner[key] = (Scene(*key), ArmIK(np.asarray(spec.sim.robot_home), spec.sim.world))
+            self._planner[key] = (Scene(*key), ArmIK(np.asarray(spec.setup.robot_home), spec.setup.world))
         scene, ik = self._planner[key]
         return demonstrate(scene, ik, spec, demo, state, settle, prefix)
 
@@ -160,7 +160,7 @@ class Oracle(Scripted):
         step = context.switch[0]
         self._heading = (spec, spec.target)  # the original ask, until the switch
         before = list(self._demo(spec, script, context).actions[:step])
-        then = self._demonstrate(asked, script, context.initial_state, spec.sim.interface.settle_steps, before)
+        then = self._demonstrate(asked, script, context.initial_state, spec.setup.interface.settle_steps, before)
         self._actions, self._t = [*before, *then.actions], 0
 
 
@@ -172,7 +172,7 @@ class Position(Scripted):
         return referent.shortcut(context.spec)
 
     def reset(self, context: Context) -> None:
-        referent = referents.registry.load(context.spec.referent, world=context.spec.sim.world)
+        referent = referents.registry.load(context.spec.referent, world=context.spec.setup.world)
         chosen = self._chosen(referent, context)
         self._actions, self._t = self._actions_for(chosen, programs.perform, context), 0
 
@@ -195,7 +195,7 @@ class Nothing:
     needs_images = False
 
     def reset(self, context: Context) -> None:
-        self._hold = context.spec.sim.interface.hold_action(context.spec.sim.robot_home)
+        self._hold = context.spec.setup.interface.hold_action(context.spec.setup.robot_home)
 
     def act(self, observation: dict) -> np.ndarray:
         return self._hold
@@ -210,8 +210,8 @@ class Random:
 
     def reset(self, context: Context) -> None:
         self._rng = np.random.default_rng(context.seed)
-        self._deltas = context.spec.sim.interface.controller != NATIVE.controller
-        self._q = np.asarray(context.spec.sim.robot_home, float).copy()
+        self._deltas = context.spec.setup.interface.controller != NATIVE.controller
+        self._q = np.asarray(context.spec.setup.robot_home, float).copy()
         self._gripper = GRIPPER_OPEN
 
     def act(self, observation: dict) -> np.ndarray:

@@ -35,9 +35,9 @@ def contact_distance(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: 
     """(T,) distances of the end effector from where it reaches when it does `program` to `target`:
     the object's grasp point (a bowl's: its rim) or the release point over a destination, the
     places the oracle's skills go to (core/contact.py)."""
-    kind = worlds.kind(spec.object(target).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(target).kind, spec.setup.world)
     brings = programs.named(program).brings
-    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world) if brings else None
+    carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.setup.world) if brings else None
     return contact.distance(kind, objects[target], ee, carried)
 
 
@@ -78,7 +78,7 @@ def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tup
         return []
     params, named = spec.task.params, {target for target, _ in alternatives}
     kept = {params.get("destination"), params.get("object"), *named}
-    return [(o.id, program) for o in spec.objects if o.id not in kept and not worlds.kind(o.kind, spec.sim.world).is_site]
+    return [(o.id, program) for o in spec.objects if o.id not in kept and not worlds.kind(o.kind, spec.setup.world).is_site]
 
 
 def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:

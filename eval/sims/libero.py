@@ -131,7 +131,7 @@ def _observing() -> str:
 
 
 @dataclass(frozen=True)
-class Setup:
+class RowStart:
     """How one row starts in LIBERO: the environment (`key`, and its BDDL file or text), the initial
     state (LIBERO's own vector, or a pose from the scene record), and which of LIBERO's bodies and
     sites are the spec's objects."""
@@ -171,13 +171,13 @@ class Rows:
         sites = [(o.id, self.world.kind(o.kind).anchor) for o in spec.objects if self._site(o.kind)]
         return tuple(i for i, _ in placed + sites), tuple(n for _, n in placed), tuple(n for _, n in sites)
 
-    def setup(self, spec: EpisodeSpec) -> Setup:
+    def start(self, spec: EpisodeSpec) -> RowStart:
         ids, objects, sites = self._followed(spec)
         if self.suite:
             task, state = self.cases[spec.index]
             bddl = {"bddl": str(libero.benchmark_root() / "bddl_files" / self.suite / f"{task}.bddl")}
             fixtures = {"fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in spec.scene_record()["fixtures"]]}
-            return Setup(
+            return RowStart(
                 f"{self.suite}/{task}", bddl, fixtures, libero.initial_states(self.suite, task)[state], ids, objects, sites
             )
         record = spec.scene_record()
@@ -187,7 +187,7 @@ class Rows:
             "objects": [{k: o[k] for k in ("instance", "pos", "quat")} for o in record["objects"] if o["instance"] in objects],
             "fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in record["fixtures"]],
         }
-        return Setup(f"{self.world.name}/exam", {"bddl_text": self._problem()}, pose, None, ids, objects, sites)
+        return RowStart(f"{self.world.name}/exam", {"bddl_text": self._problem()}, pose, None, ids, objects, sites)
 
     def _problem(self) -> str:
         """One BDDL problem for every trial of a generated exam: all its objects, on the world's floor
@@ -203,13 +203,13 @@ class Rows:
         return floor_bddl(self.union, containers, goal)
 
 
-def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> list[str] | None:
+def predicate(spec: EpisodeSpec, row_start: RowStart, target: str, program: str) -> list[str] | None:
     """LIBERO's goal predicate of a row's ask (carry what the program moves to where it goes; a
     motion of the furniture), or None where LIBERO has no predicate for the program."""
     params, own = spec.task.params, programs.named(program).libero
-    where = dict(zip(setup.ids, (*setup.objects, *setup.sites)))
+    where = dict(zip(row_start.ids, (*row_start.objects, *row_start.sites)))
     if own is not None:
-        place = libero.place_name(worlds.kind(spec.object(target).kind, spec.sim.world), where[target])
+        place = libero.place_name(worlds.kind(spec.object(target).kind, spec.setup.world), where[target])
         return libero.goal(own, place, where[params["object"]] if "object" in params else None)
     if "object" in params:
         moved, destination = params["object"], target
@@ -217,7 +217,7 @@ def predicate(spec: EpisodeSpec, setup: Setup, target: str, program: str) -> lis
         moved, destination = target, params["destination"]
     else:
         return None
-    kind = worlds.kind(spec.object(destination).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(destination).kind, spec.setup.world)
     if kind.contain is not None:
         return ["In", where[moved], f"{where[destination]}_contain_region"]
     return ["On", where[moved], where[destination]]
@@ -241,7 +241,7 @@ class LiberoSim:
         )
         self._key: str | None = None
         self._now: dict[str, np.ndarray] = {}
-        self.setup: Setup | None = None
+        self.row_start: RowStart | None = None
         self.spec: EpisodeSpec | None = None
         self._containers: set[str] = set()  # the row's movable containers (a basket), whose turns are logged
 
@@ -266,16 +266,16 @@ class LiberoSim:
         return lines[-1] if lines else f"exit code {self.server.poll()}"
 
     def begin(self, row: pd.Series, spec: EpisodeSpec, render: bool) -> None:
-        setup = self.rows.setup(spec)
-        if setup.key != self._key:
-            cameras = [spec.sim.interface.cameras[c] for c in spec.sim.cameras] if render else []
-            self._ask({"op": "open", "key": setup.key, "size": spec.sim.image_size, "cameras": cameras, **setup.bddl})
-            self._key = setup.key
-        arrays = {"state": setup.state} if setup.state is not None else {}
-        start = {"pose": setup.start} if setup.state is None else setup.start
-        request = {"op": "reset", "seed": int(row["trial"]), "objects": setup.objects, "sites": setup.sites, **start}
+        row_start = self.rows.start(spec)
+        if row_start.key != self._key:
+            cameras = [spec.setup.interface.cameras[c] for c in spec.setup.cameras] if render else []
+            self._ask({"op": "open", "key": row_start.key, "size": spec.setup.image_size, "cameras": cameras, **row_start.bddl})
+            self._key = row_start.key
+        arrays = {"state": row_start.state} if row_start.state is not None else {}
+        start = {"pose": row_start.start} if row_start.state is None else row_start.start
+        request = {"op": "reset", "seed": int(row["trial"]), "objects": row_start.objects, "sites": row_start.sites, **start}
         _, self._now = self._ask(request, arrays)
-        self.setup, self.spec = setup, spec
+        self.row_start, self.spec = row_start, spec
         self._containers = {o.id for o in spec.objects if self.rows.world.kind(o.kind).contain is not None}
 
     def step(self, action: np.ndarray) -> None:
@@ -285,13 +285,13 @@ class LiberoSim:
         return self._now["ee"]
 
     def positions(self) -> dict[str, tuple[float, ...]]:
-        assert self.setup is not None
-        return {i: tuple(float(v) for v in p) for i, p in zip(self.setup.ids, self._now["objects"])}
+        assert self.row_start is not None
+        return {i: tuple(float(v) for v in p) for i, p in zip(self.row_start.ids, self._now["objects"])}
 
     def turns(self) -> dict[str, tuple[float, ...]]:
         """How each movable container (a basket) is turned now: its body's orientation in LIBERO."""
-        assert self.setup is not None
-        ids = self.setup.ids[: len(self.setup.objects)]
+        assert self.row_start is not None
+        ids = self.row_start.ids[: len(self.row_start.objects)]
         return {i: tuple(float(v) for v in q) for i, q in zip(ids, self._now["quats"]) if i in self._containers}
 
     def observe(self, instruction: str, occluded: bool, images: bool) -> dict:
@@ -302,17 +302,17 @@ class LiberoSim:
         state = np.concatenate([now["ee"], axis_angle(now["hand_quat"]), now["fingers"]]).astype(np.float32)
         obs: dict = {STATE_KEY: state, TASK_KEY: instruction}
         if images:
-            size, interface = self.spec.sim.image_size, self.spec.sim.interface
+            size, interface = self.spec.setup.image_size, self.spec.setup.interface
             frames = {} if occluded else self._ask({"op": "render"})[1]
-            for cam in self.spec.sim.cameras:
+            for cam in self.spec.setup.cameras:
                 raw = frames.get(interface.cameras[cam])
                 obs[IMAGE_PREFIX + cam] = np.zeros((size, size, 3), np.uint8) if raw is None else raw[::-1, ::-1].copy()
         return obs
 
     def verdict(self, row: pd.Series) -> bool | None:
         """LIBERO's own predicate of the row's ask, now."""
-        assert self.setup is not None and self.spec is not None
-        ask = predicate(self.spec, self.setup, str(row["target"]), str(row["program"]))
+        assert self.row_start is not None and self.spec is not None
+        ask = predicate(self.spec, self.row_start, str(row["target"]), str(row["program"]))
         if ask is None:
             return None
         answer, _ = self._ask({"op": "goal", "predicates": [ask]})

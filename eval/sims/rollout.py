@@ -131,9 +131,9 @@ class OurSim:
         scene.set_physics_state(np.asarray(row["initial_state"]))
         self.cameras = None
         if render:
-            key = (scene, spec.sim.image_size, spec.sim.cameras)  # a scene per inventory, profile, world and look
+            key = (scene, spec.setup.image_size, spec.setup.cameras)  # a scene per inventory, profile, world and look
             if key not in self._cameras:
-                self._cameras[key] = Cameras(scene, spec.sim.image_size, spec.sim.cameras)
+                self._cameras[key] = Cameras(scene, spec.setup.image_size, spec.setup.cameras)
             self.cameras = self._cameras[key]
 
     def step(self, action: np.ndarray) -> None:
@@ -186,12 +186,12 @@ class Runner:
         except Exception as exc:  # a broken policy fails its rollout, not the run
             log.error = f"policy reset failed: {type(exc).__name__}: {exc}"
             return log
-        features, sim, render = spec.sim.interface, self.sim, self.policy.needs_images
+        features, sim, render = spec.setup.interface, self.sim, self.policy.needs_images
         try:
             sim.begin(row, spec, render)
             log.record(sim)
             for _ in range(features.settle_steps):  # as the profile's own environment starts a rollout
-                sim.step(features.hold_action(spec.sim.robot_home))
+                sim.step(features.hold_action(spec.setup.robot_home))
                 log.record(sim)
         except SimError as exc:
             log.error = f"the simulator could not start the row: {exc}"
@@ -212,7 +212,7 @@ class Runner:
                 if t == 0 and predicted is not None:  # the prediction made with the first chunk
                     made = predicted()
                     if made is not None:
-                        log.predicted, problem = check_prediction(made, spec.sim.image_size)
+                        log.predicted, problem = check_prediction(made, spec.setup.image_size)
                         if problem:
                             log.error = f"step 0: {problem}"
                             break

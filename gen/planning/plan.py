@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core import profiles, worlds
-from core.spec import FAST, EpisodeSpec, SceneObject, SimSettings
+from core.spec import FAST, EpisodeSpec, SceneObject, Setup
 from gen.config import GenConfig, load_referent
 from gen.planning import mix
 from gen.planning.audit import audit
@@ -53,11 +53,11 @@ def designs(referent: Referent, n: int, seed: int, split: str = "train", stream:
 
 
 def realize(
-    referent: Referent, design: Design, index: int, seed: int, sim: SimSettings, attempt: int = 0, split: str = "train"
+    referent: Referent, design: Design, index: int, seed: int, setup: Setup, attempt: int = 0, split: str = "train"
 ) -> EpisodeSpec:
-    if sim.world != referent.config.world:
-        raise ValueError(f"referent {referent.name}'s scenes are in world {referent.config.world}, not {sim.world}")
-    layout, world = referent.config.layout, worlds.world(sim.world)
+    if setup.world != referent.config.world:
+        raise ValueError(f"referent {referent.name}'s scenes are in world {referent.config.world}, not {setup.world}")
+    layout, world = referent.config.layout, worlds.world(setup.world)
     rng = np.random.default_rng([seed, index, attempt, *SPLITS[split]])
     objects = []
     for p in design.placements:
@@ -80,14 +80,14 @@ def realize(
         counterfactuals=design.counterfactuals,
         assets=referent.assets(),
         task=design.task or referent.config.task,
-        sim=sim,
+        setup=setup,
         attempt=attempt,
         split=split,
     )
 
 
-def plan(referent: Referent, n: int, seed: int, sim: SimSettings, split: str = "train") -> list[EpisodeSpec]:
-    return [realize(referent, d, i, seed, sim, split=split) for i, d in enumerate(designs(referent, n, seed, split))]
+def plan(referent: Referent, n: int, seed: int, setup: Setup, split: str = "train") -> list[EpisodeSpec]:
+    return [realize(referent, d, i, seed, setup, split=split) for i, d in enumerate(designs(referent, n, seed, split))]
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ class Share:
     """One referent type's part of a plan: the type, where its scenes happen, the audit of its episodes."""
 
     referent: Referent
-    sim: SimSettings
+    setup: Setup
     audit: dict
 
 
@@ -115,18 +115,18 @@ class Planned:
         return share
 
     @property
-    def recording(self) -> SimSettings:
-        """Sim settings with what every share records (profile, frame size, rate, cameras; one
+    def recording(self) -> Setup:
+        """The setup with what every share records (profile, frame size, rate, cameras; one
         dataset records one set, gen/config.py checks): the first share's."""
-        return self.shares[0].sim
+        return self.shares[0].setup
 
 
-def world_sim(
+def world_setup(
     world: worlds.World, profile: str | None = None, image_size: int | None = None, fps: int = 20, look: str = FAST
-) -> SimSettings:
-    """A world's sim settings: its robot's home, a profile it is recorded in (default its own)."""
+) -> Setup:
+    """A world's setup: its robot's home, a profile it is recorded in (default its own)."""
     features = profiles.named(profile or world.profiles[0])
-    return SimSettings(
+    return Setup(
         image_size=image_size or features.image_size,
         fps=fps,
         cameras=features.camera_names,
@@ -137,13 +137,13 @@ def world_sim(
     )
 
 
-def sim_settings(cfg: GenConfig, world: worlds.World) -> SimSettings:
-    return world_sim(world, cfg.profile, cfg.image_size, cfg.fps, cfg.look)
+def configured_setup(cfg: GenConfig, world: worlds.World) -> Setup:
+    return world_setup(world, cfg.profile, cfg.image_size, cfg.fps, cfg.look)
 
 
-def default_sim(referent: Referent) -> SimSettings:
-    """The sim settings of a referent's world in its default profile (what tests plan with)."""
-    return world_sim(worlds.world(referent.config.world))
+def default_setup(referent: Referent) -> Setup:
+    """The setup of a referent's world in its default profile (what tests plan with)."""
+    return world_setup(worlds.world(referent.config.world))
 
 
 def check_audit(report: dict) -> None:
@@ -162,7 +162,7 @@ def plan_and_audit(cfg: GenConfig) -> Planned:
     types, roles, mixed = [], [], len(cfg.shares()) > 1
     for one in cfg.shares():
         referent = load_referent(one)
-        types.append((referent, sim_settings(one, worlds.world(referent.config.world))))
+        types.append((referent, configured_setup(one, worlds.world(referent.config.world))))
         try:
             roles.append(designs(referent, one.n, one.seed, one.split, stream=referent.label if mixed else None))
         except ReferentSpecError as exc:
@@ -170,13 +170,13 @@ def plan_and_audit(cfg: GenConfig) -> Planned:
     episodes, k = mix.interleave(roles), len(types)
     specs = []
     for i, design in enumerate(episodes):
-        referent, sim = types[mix.turn(i, k)]
-        specs.append(realize(referent, design, i, cfg.seed, sim, split=cfg.split))
+        referent, setup = types[mix.turn(i, k)]
+        specs.append(realize(referent, design, i, cfg.seed, setup, split=cfg.split))
     if cfg.n >= PROGRESS_FROM:
         print(f"auditing the plan of {cfg.n} episodes ...", file=sys.stderr)
     shares = []
-    for place, (referent, sim) in enumerate(types):
+    for place, (referent, setup) in enumerate(types):
         report = audit(referent, mix.share(specs, place, k))
         check_audit(report)
-        shares.append(Share(referent, sim, report))
+        shares.append(Share(referent, setup, report))
     return Planned(tuple(shares), episodes, specs)

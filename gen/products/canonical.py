@@ -40,7 +40,7 @@ import numpy as np
 from core import exam, libero, profiles, programs, worlds
 from core.profiles import STATE_KEY, TASK_KEY
 from core.rotations import yaw_of
-from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, SimSettings
+from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, Setup
 from gen.config import check_seed
 from gen.planning.audit import audit
 from gen.products.exam import take_hint
@@ -266,7 +266,7 @@ def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
     return suite, out
 
 
-def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings) -> EpisodeSpec:
+def trial_spec(suite: Suite, task: str, index: int, seed: int, setup: Setup) -> EpisodeSpec:
     """A LIBERO task's scene as an episode spec (the referent type's `canonical` design of it):
     its objects under the design's ids, each where the task's region puts it until the initial
     state poses it, the instruction the suite delivers, the swaps."""
@@ -295,7 +295,7 @@ def trial_spec(suite: Suite, task: str, index: int, seed: int, sim: SimSettings)
         counterfactuals=suite.swaps(task, design, delivered)[0],
         assets=suite.inventory(),
         task=design.task or referent.config.task,
-        sim=sim,
+        setup=setup,
         split="exam",
     )
 
@@ -317,7 +317,7 @@ def build(options: CanonicalOptions) -> None:
     started = time.perf_counter()
     world = suite.world
     profile = profiles.named(world.profiles[0])
-    sim = SimSettings(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
+    setup = Setup(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
     rng = np.random.default_rng(options.seed)
     chosen = {
         task: sorted(rng.choice(len(libero.initial_states(suite.name, task)), options.states, replace=False).tolist())
@@ -325,12 +325,12 @@ def build(options: CanonicalOptions) -> None:
     }
     scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
     ik = ArmIK(np.asarray(world.robot_home), world.name)
-    cameras = Cameras(scene, sim.image_size, sim.cameras)
+    cameras = Cameras(scene, setup.image_size, setup.cameras)
     rows, specs, without = [], [], {}
     bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
     for task in suite.tasks:
         for s in chosen[task]:
-            spec = load_state(scene, suite, task, s, sim, len(specs), options.seed)
+            spec = load_state(scene, suite, task, s, setup, len(specs), options.seed)
             values = {a.id: a.value for a in suite.referent.alternatives(spec)}
             ee = [float(v) for v in scene.ee_pos()]
             state = scene.physics_state().astype(np.float64).tolist()
@@ -347,7 +347,7 @@ def build(options: CanonicalOptions) -> None:
     report = audit(suite.referent, specs)
     with staging(out) as root:
         root.mkdir(parents=True)
-        header = _header(options, suite, profile.name, sim, chosen, report)
+        header = _header(options, suite, profile.name, setup, chosen, report)
         exam.write(root, rows, {**header, **({exam.NO_SWITCH: without} if without else {})})
     left = f"; left out: {len(suite.left_out)} task(s) (exam.json says why)" if suite.left_out else ""
     print(
@@ -356,12 +356,12 @@ def build(options: CanonicalOptions) -> None:
     )
 
 
-def load_state(scene: Scene, suite: Suite, task: str, state: int, sim: SimSettings, index: int = 0, seed: int = 0) -> EpisodeSpec:
+def load_state(scene: Scene, suite: Suite, task: str, state: int, setup: Setup, index: int = 0, seed: int = 0) -> EpisodeSpec:
     """Put `scene` in a LIBERO task's initial state number `state` (joints set by name from
     LIBERO's state vector); returns the trial's spec, its objects posed as that state poses them."""
     problem = suite.problem(task)
     vector = libero.initial_states(suite.name, task)[state]
-    spec = _posed(trial_spec(suite, task, index, seed, sim), vector, problem, suite.world)
+    spec = _posed(trial_spec(suite, task, index, seed, setup), vector, problem, suite.world)
     scene.reset(spec)
     scene.set_joints(*libero.split_state(vector, problem))
     return spec
@@ -380,7 +380,7 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
     return replace(spec, objects=(*objects, *spec.objects[len(objects) :]), counterfactuals=swaps)  # places on furniture stay
 
 
-def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSettings, chosen: dict, report: dict) -> dict:
+def _header(options: CanonicalOptions, suite: Suite, profile: str, setup: Setup, chosen: dict, report: dict) -> dict:
     features, world, referent = profiles.named(profile), suite.world, suite.referent
     named = f"suite={suite.name}" if suite.name != world.suite else f"world={world.name}"
     tasks = {}
@@ -418,11 +418,11 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, sim: SimSetti
             "settle_steps": features.settle_steps,
         },
         "observation": {
-            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY],
+            "keys": [features.image_key(c) for c in setup.cameras] + [STATE_KEY],
             "instruction": f"the `instruction` column of trials.parquet; info['instruction'] in the gymnasium env; "
             f"`{TASK_KEY}` in python -m eval's observation dicts",
-            "image_size": sim.image_size,
-            "fps": sim.fps,
+            "image_size": setup.image_size,
+            "fps": setup.fps,
             "state_names": list(features.state_names),
             "action_names": list(features.action_names),
             "action": features.action_meaning,

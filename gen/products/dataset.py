@@ -135,7 +135,7 @@ def _simulate(cfg: GenConfig, planned: Planned, partial: Partial, done: int, pro
     from gen.products.workers import Job, WorkerCrash, produce
 
     shares = zip(cfg.shares(), planned.shares, strict=True)
-    types = tuple((one.referent, one.spec_overrides(), share.sim) for one, share in shares)
+    types = tuple((one.referent, one.spec_overrides(), share.setup) for one, share in shares)
     job = Job(types, cfg.spec, cfg.codec, cfg.seed, cfg.max_attempts)
     name = mix.name([share.referent.label for share in planned.shares])
     bar = tqdm(total=len(planned.designs), initial=done, desc=name, unit="ep", disable=not progress, dynamic_ncols=True)
@@ -160,9 +160,9 @@ def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) ->
     """The LeRobot files, from the episode files, in order."""
     from gen.lerobot.writer import LeRobotWriter, Recording
 
-    sim, features = planned.recording, planned.recording.interface
+    setup, features = planned.recording, planned.recording.interface
     writer = LeRobotWriter(
-        root, Recording(sim.fps, sim.image_size, sim.cameras, features.state_names, features.action_names, cfg.codec)
+        root, Recording(setup.fps, setup.image_size, setup.cameras, features.state_names, features.action_names, cfg.codec)
     )
     rows, written = [], []
     for produced in partial.episodes(cfg.n):

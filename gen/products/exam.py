@@ -77,7 +77,7 @@ def _trials(cfg: GenConfig, planned: Planned, progress: bool) -> tuple[list[dict
     from gen.products.produce import DemoFailed, Producer
 
     referent = planned.only.referent
-    producer = Producer(referent, planned.only.sim)
+    producer = Producer(referent, planned.only.setup)
     switches = 1 if cfg.switches is None else cfg.switches
     rows: list[dict] = []
     without: dict[str, str] = {}
@@ -105,7 +105,7 @@ def first_frame(cameras: Cameras, spec: EpisodeSpec) -> bytes:
     """Which object each pixel of the agentview frame a rollout first sees shows (the scene as
     its rollouts start, after the profile's settle steps): what a predicted point is judged by."""
     ids = [o.id for o in spec.objects]
-    return exam.encode_objects(cameras.object_indices(spec.sim.interface.agentview, ids))
+    return exam.encode_objects(cameras.object_indices(spec.setup.interface.agentview, ids))
 
 
 def switch_rows(
@@ -124,7 +124,7 @@ def switch_rows(
     choices = exam.switch_choices(trial, spec, switches)
     if not choices:
         return (), "no alternative to switch to (the instruction names the only candidate)"
-    settle = spec.sim.interface.settle_steps
+    settle = spec.setup.interface.settle_steps
     demo = demonstrate(scene, ik, spec, referent.demo, np.asarray(state), settle)
     if not demo.success:
         return (), f"the oracle does not finish the original ask from this state ({demo.failure})"
@@ -164,20 +164,20 @@ def _longest(producer: Producer, referent: Referent, demo: Demo) -> int:
 
 def _header(cfg: GenConfig, planned: Planned, provenance: Provenance) -> dict:
     share = planned.only
-    sim, features = share.sim, share.sim.interface
+    setup, features = share.setup, share.setup.interface
     return {
         "referent": share.referent.name,
         "seed": cfg.seed,
         "split": "exam",
         "command": provenance.command(),
         **({} if features.name == NATIVE.name else {"profile": features.name}),
-        **({} if sim.world == "native" else {"world": sim.world}),
+        **({} if setup.world == "native" else {"world": setup.world}),
         "observation": {
-            "keys": [features.image_key(c) for c in sim.cameras] + [STATE_KEY],
+            "keys": [features.image_key(c) for c in setup.cameras] + [STATE_KEY],
             "instruction": f"the `instruction` column of trials.parquet; info['instruction'] in the gymnasium env; "
             f"`{TASK_KEY}` in python -m eval's observation dicts",
-            "image_size": sim.image_size,
-            "fps": sim.fps,
+            "image_size": setup.image_size,
+            "fps": setup.fps,
             "state_names": list(features.state_names),
             "action_names": list(features.action_names),
             "action": features.action_meaning,

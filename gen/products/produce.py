@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.spec import EpisodeSpec, SimSettings
+from core.spec import EpisodeSpec, Setup
 from core.success import Outcome
 from gen.lerobot.stats import image_histogram
 from gen.lerobot.video import encode_episode
@@ -43,22 +43,22 @@ class Producer:
     """What a process keeps across episodes: compiled scene, IK and renderer."""
 
     def __init__(
-        self, referent: Referent | None, sim: SimSettings, codec: str = "h264", assets: tuple[tuple[str, int], ...] | None = None
+        self, referent: Referent | None, setup: Setup, codec: str = "h264", assets: tuple[tuple[str, int], ...] | None = None
     ) -> None:
         """`referent` may be None for a producer that only records demos of given specs
         (then `assets` names the scene)."""
         self.referent = referent
-        self.sim = sim
+        self.setup = setup
         self.codec = codec
         inventory = assets if assets is not None else referent.assets()
-        self.scene: Scene = scene_for(inventory, sim.profile, sim.world, sim.look)
-        self.ik = ArmIK(np.asarray(sim.robot_home), sim.world)
+        self.scene: Scene = scene_for(inventory, setup.profile, setup.world, setup.look)
+        self.ik = ArmIK(np.asarray(setup.robot_home), setup.world)
         self._cameras: Cameras | None = None  # made on first use: an exam draws only its first frames' object maps
 
     @property
     def cameras(self) -> Cameras:
         if self._cameras is None:
-            self._cameras = Cameras(self.scene, self.sim.image_size, self.sim.cameras)
+            self._cameras = Cameras(self.scene, self.setup.image_size, self.setup.cameras)
         return self._cameras
 
     def close(self) -> None:
@@ -70,7 +70,7 @@ class Producer:
     ) -> tuple[Demo, list[str]]:
         failures: list[str] = []
         for attempt in range(max_attempts):
-            spec = realize(self.referent, design, index, seed, self.sim, attempt, split)
+            spec = realize(self.referent, design, index, seed, self.setup, attempt, split)
             demo = demonstrate(self.scene, self.ik, spec, self.referent.demo)
             if demo.success:
                 return demo, failures
@@ -84,9 +84,9 @@ class Producer:
     def record(self, demo: Demo, failures: list[str]) -> Produced:
         """Render a verified demo by restoring its recorded physics states, one per action."""
         spec, actions = demo.spec, demo.actions
-        size = self.sim.image_size
-        frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.sim.cameras}
-        states = np.empty((len(actions), self.sim.interface.state_size), np.float32)
+        size = self.setup.image_size
+        frames = {c: np.empty((len(actions), size, size, 3), np.uint8) for c in self.setup.cameras}
+        states = np.empty((len(actions), self.setup.interface.state_size), np.float32)
         self.scene.reset(spec)  # colours and body assignment; the states below carry the rest
         for t, physics in enumerate(demo.states):
             self.scene.set_physics_state(physics)
@@ -97,7 +97,7 @@ class Producer:
             task=spec.instruction,
             states=states,
             actions=actions,
-            videos={c: encode_episode(f, self.sim.fps, self.codec) for c, f in frames.items()},
+            videos={c: encode_episode(f, self.setup.fps, self.codec) for c, f in frames.items()},
             histograms={c: image_histogram(f) for c, f in frames.items()},
         )
         assert demo.outcome is not None

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 def row(episode_index: int, spec: EpisodeSpec, produced: Produced | None = None, mixed: bool = False) -> dict:
     """A scene record; without `produced` (a plan), the simulation columns are empty."""
-    world = {"world": spec.sim.world} if mixed else {}
+    world = {"world": spec.setup.world} if mixed else {}
     return {
         "episode_index": episode_index,
         "referent": spec.referent,

@@ -28,7 +28,7 @@ def rendered_frames(specs: list[EpisodeSpec], camera: str) -> dict[int, np.ndarr
     for spec in specs:
         scene = spec_scene(spec)
         scene.reset(spec)
-        cams = Cameras(scene, spec.sim.image_size, (camera,))
+        cams = Cameras(scene, spec.setup.image_size, (camera,))
         out[spec.index] = cams.render()[camera].copy()
         cams.close()
     return out
@@ -48,7 +48,7 @@ def contact_sheet(root: Path, out: Path, n: int = 16, camera: str | None = None,
     records = scenes.read(root).head(n)
     specs = [EpisodeSpec.from_json(s) for s in records["spec"]]
     episodes = list(records["episode_index"])
-    features = specs[0].sim.interface
+    features = specs[0].setup.interface
     camera = camera or features.camera_names[0]
     if camera not in features.cameras:
         raise ValueError(f"camera must be one of {', '.join(features.camera_names)} (profile {features.name}), got {camera!r}")

@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from core.spec import SimSettings
+from core.spec import Setup
 from gen.planning import mix
 from gen.products.produce import Produced, Producer
 from jobs import faults
@@ -35,9 +35,9 @@ class WorkerCrash(RuntimeError):
 @dataclass(frozen=True)
 class Job:
     """What a worker needs to build its own Producers: how to load each referent type (those of a
-    mix take turns, gen/planning/mix.py: its name, its spec overrides, the sim of its world)."""
+    mix take turns, gen/planning/mix.py: its name, its spec overrides, the setup of its world)."""
 
-    referents: tuple[tuple[str, dict[str, Any], SimSettings], ...]
+    referents: tuple[tuple[str, dict[str, Any], Setup], ...]
     spec_path: str | None
     codec: str
     seed: int
@@ -47,8 +47,8 @@ class Job:
     def producer(self, place: int) -> Producer:
         from referents import registry
 
-        name, overrides, sim = self.referents[place]
-        return Producer(registry.load(name, self.spec_path, overrides, sim.world), sim, self.codec)
+        name, overrides, setup = self.referents[place]
+        return Producer(registry.load(name, self.spec_path, overrides, setup.world), setup, self.codec)
 
 
 _producers: dict[int, Producer] = {}  # one per referent type, in each worker process

@@ -17,7 +17,7 @@ from core import contact, worlds
 from core.exam import Exam, trial_rows
 from core.spec import EpisodeSpec
 from eval.scoring.score import score
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from referents import registry
 
 CASES = [(name, world) for name in registry.available() for world in registry.worlds_of(name)]
@@ -25,7 +25,7 @@ CASES = [(name, world) for name in registry.available() for world in registry.wo
 
 def _exam(name: str, world: str) -> tuple[Exam, list[EpisodeSpec]]:
     referent = registry.load(name, world=world)
-    specs = plan(referent, 3, seed=0, sim=default_sim(referent), split="exam")
+    specs = plan(referent, 3, seed=0, setup=default_setup(referent), split="exam")
     rows: list[dict] = []
     for trial, spec in enumerate(specs):
         values = {a.id: a.value for a in referent.alternatives(spec)}
@@ -36,7 +36,7 @@ def _exam(name: str, world: str) -> tuple[Exam, list[EpisodeSpec]]:
 
 
 def _graspable(spec: EpisodeSpec) -> list[str]:
-    params, world = spec.task.params, spec.sim.world
+    params, world = spec.task.params, spec.setup.world
     carried = {params.get("destination"), params.get("object")}
     return [o.id for o in spec.objects if o.id not in carried and not worlds.kind(o.kind, world).is_site]
 
@@ -49,7 +49,7 @@ def _logs(exam: Exam, land_on: dict[int, str]) -> pd.DataFrame:
         ee = [list(row["initial_ee"]), list(row["initial_ee"])]
         target = land_on.get(int(row["row"]))
         if target is not None:
-            ee[1] = contact.grasp_point(worlds.kind(spec.object(target).kind, spec.sim.world), objects[target][1]).tolist()
+            ee[1] = contact.grasp_point(worlds.kind(spec.object(target).kind, spec.setup.world), objects[target][1]).tolist()
         logged = json.dumps({k: v.tolist() for k, v in objects.items()})
         out.append({"row": int(row["row"]), "ee": ee, "objects": logged, "error": None})
     return pd.DataFrame(out)

@@ -14,7 +14,7 @@ import pytest
 from core import libero
 from core.profiles import LIBERO
 from core.programs import achieved, named
-from core.spec import EpisodeSpec, SceneObject, SimSettings, TaskSpec
+from core.spec import EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome
 
 OPEN_TRAVEL = libero.KINDS["top_drawer"].drawer.open_travel  # LIBERO's thresholds, as the pieces own them
@@ -39,9 +39,9 @@ def _spec(program: str, target: str, moved: str | None = None) -> EpisodeSpec:
         SceneObject("bottle", "wine_bottle", "wine bottle", 3, (0.05, 0.14, 0.899)),
         SceneObject("rack", "wine_rack_top", "rack", 12, tuple(RACK)),
     )
-    sim = SimSettings(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_goal")
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_goal")
     task = TaskSpec(program=program, params={"object": moved} if moved else {})
-    return EpisodeSpec("libero_goal", 0, 0, objects, target, "", "", (), (), task, sim)
+    return EpisodeSpec("libero_goal", 0, 0, objects, target, "", "", (), (), task, setup)
 
 
 def _judge(spec: EpisodeSpec, moves: dict[str, tuple[float, float, float]]) -> bool:

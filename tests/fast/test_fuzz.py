@@ -11,7 +11,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from core.spec import SimSettings
+from core.spec import Setup
 from gen.config import GenConfig, parse
 from gen.planning.audit import audit
 from gen.planning.plan import designs, realize
@@ -66,7 +66,12 @@ def mutated_specs(draw: st.DrawFn) -> dict:
             spec.pop(key, None)
         elif action == "junk":
             spec[key] = draw(JUNK)
-        elif key == "objects" and isinstance(spec.get("objects"), list) and spec["objects"]:
+        elif (
+            key == "objects"
+            and isinstance(spec.get("objects"), list)
+            and spec["objects"]
+            and isinstance(spec["objects"][0], dict)
+        ):
             spec["objects"][0][draw(st.sampled_from(["kind", "name", "attributes", "role"]))] = draw(JUNK)
         elif key == "layout" and isinstance(spec.get("layout"), dict):
             spec["layout"][draw(st.sampled_from(["slots", "jitter", "yaw", "canonical_slot"]))] = draw(JUNK)
@@ -81,7 +86,7 @@ def test_any_spec_file_plans_or_fails_naming_the_file(tmp_path: Path, spec: dict
     try:
         ref = registry.load("unused", str(path))
         plan = designs(ref, 6, seed=0)
-        audit(ref, [realize(ref, d, i, 0, SimSettings(world=ref.config.world)) for i, d in enumerate(plan)])
+        audit(ref, [realize(ref, d, i, 0, Setup(world=ref.config.world)) for i, d in enumerate(plan)])
     except (ReferentSpecError, registry.UnknownReferent) as exc:
         assert str(exc).startswith(str(path)) or "referent" in str(exc)
         assert "\n" not in str(exc).strip()

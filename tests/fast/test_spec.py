@@ -6,14 +6,14 @@ import json
 
 import pytest
 
-from core.spec import EpisodeSpec, SimSettings, SpecError
+from core.spec import EpisodeSpec, Setup, SpecError
 from gen.planning.plan import plan
 from referents import registry
 
 
 @pytest.fixture(scope="module")
 def specs() -> list[EpisodeSpec]:
-    return plan(registry.load("object"), 12, seed=3, sim=SimSettings())
+    return plan(registry.load("object"), 12, seed=3, setup=Setup())
 
 
 def test_json_round_trip_is_exact(specs: list[EpisodeSpec]) -> None:
@@ -48,11 +48,11 @@ def test_version_and_shape_are_checked(specs: list[EpisodeSpec]) -> None:
 def test_a_libero_scene_record_names_every_fixture_and_its_pose(name: str) -> None:
     """The cabinet, the stove, the rack: an episode is rebuilt in LIBERO's environment from its record alone."""
     from core import worlds
-    from gen.planning.plan import default_sim, plan
+    from gen.planning.plan import default_setup, plan
     from referents.registry import load
 
     referent = load(name)
-    record = plan(referent, 1, 0, default_sim(referent))[0].scene_record()
+    record = plan(referent, 1, 0, default_setup(referent))[0].scene_record()
     world = worlds.world(referent.config.world)
     assert {f["instance"]: f["pos"] for f in record["fixtures"]} == {f.name: list(f.pos) for f in world.fixtures}
     assert {"wooden_cabinet_1", "flat_stove_1"} <= {f["instance"] for f in record["fixtures"]}

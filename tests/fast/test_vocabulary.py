@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from referents.registry import Referent, available, load
 from referents.schema import ReferentSpecError
 
@@ -16,7 +16,7 @@ N = 24
 def _planned(referent: Referent, seed: int = 3) -> list[tuple[str, set[str]]]:
     """Each planned episode's target value and the values of everything it could have asked for."""
     out = []
-    for spec in plan(referent, N, seed, default_sim(referent)):
+    for spec in plan(referent, N, seed, default_setup(referent)):
         values = {a.id: a.value for a in referent.alternatives(spec)}
         out.append((values[referent.answer(spec)], set(values.values())))
     return out
@@ -68,7 +68,7 @@ def test_libero_spatial_takes_its_places_as_the_card_lists_them() -> None:
 
 def test_libero_goal_holds_out_a_place_and_names_what_it_accepts() -> None:
     held = load("libero_goal", overrides={"holdout": ["stove"]})
-    specs = plan(held, N, 0, default_sim(held))
+    specs = plan(held, N, 0, default_setup(held))
     assert all(o.name != "stove" for spec in specs for o in spec.objects)
     with pytest.raises(ReferentSpecError) as refused:
         load("libero_goal", overrides={"targets": ["sink"]})

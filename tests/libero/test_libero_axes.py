@@ -27,7 +27,7 @@ from core.spec import EpisodeSpec
 from eval.policies.registry import make
 from eval.scoring.battery import take
 from gen.planning.audit import audit
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from gen.products import scenes
 from helpers import PICTURE_STATES, Pictures, liberos_own, liberos_replay, make_dataset, rows_of
 from oracle.render import Cameras
@@ -53,7 +53,7 @@ def test_each_axis_is_its_types_own_design_in_a_liberos_scene(name: str) -> None
     world = AXES[name]
     referent = registry.load(name, world=world)
     assert referent.name == name and referent.config.world == world and referent.label == f"{name}@{world}"
-    specs = plan(referent, 60, 0, default_sim(referent))
+    specs = plan(referent, 60, 0, default_setup(referent))
     kinds = worlds.world(world).kinds
     destination = {"libero_object": "basket", "libero_spatial": "plate"}[world]
     for spec in specs:
@@ -70,7 +70,7 @@ def test_the_axis_a_liberos_type_is_is_that_type() -> None:
     goal: LIBERO-Spatial's and LIBERO-Goal's types)."""
     for axis, own in (("object", "libero_object"), ("relation", "libero_spatial"), ("goal", "libero_goal")):
         alias, itself = registry.load(axis, world=own), registry.load(own)
-        assert plan(alias, 12, 3, default_sim(alias)) == plan(itself, 12, 3, default_sim(itself))
+        assert plan(alias, 12, 3, default_setup(alias)) == plan(itself, 12, 3, default_setup(itself))
         assert registry.own_name(axis, own) == (own, None)
 
 
@@ -133,7 +133,7 @@ def test_the_same_pictures_and_poses_at_generated_states(mixed: Path, world: str
     for k, index in enumerate(firsts):
         spec = EpisodeSpec.from_json(records.loc[index, "spec"])
         referent = registry.load(spec.referent, world=world)
-        scene = scene_for(referent.assets(), spec.sim.profile, world)
+        scene = scene_for(referent.assets(), spec.setup.profile, world)
         scene.reset(spec)
         cameras = Cameras(scene, LIBERO.image_size, LIBERO.camera_names)
         try:

@@ -22,7 +22,7 @@ from core.success import Outcome
 from eval.policies.registry import make
 from eval.scoring.battery import take
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from gen.products import scenes
 from gen.products.canonical import covered
 from helpers import (
@@ -111,8 +111,8 @@ def test_a_bowl_beside_the_stove_is_taken_from_a_side_clear_of_it(world: worlds.
     the bowl off the places beside the stove since it pushes the plate there, `keep_off`: the bowl
     of `n=20 seed=1`'s episode 7 trades places with what stands at the stove's corner.)"""
     referent = registry.load(SUITE)
-    sim = default_sim(referent)
-    spec = plan(referent, 20, 1, sim)[7]
+    setup = default_setup(referent)
+    spec = plan(referent, 20, 1, setup)[7]
     carried = spec.task.params["object"]
     corner = (-0.1, 0.28, spec.object(carried).pos[2])  # layout slot 4, the stove's burner 8 cm to its left
     there = next((o for o in spec.objects if o.slot == 4), None)
@@ -121,13 +121,13 @@ def test_a_bowl_beside_the_stove_is_taken_from_a_side_clear_of_it(world: worlds.
     bowl = spec.object(carried)
     kind = world.kind(bowl.kind)
     assert kind.rim, f"episode 7 no longer carries the bowl but {bowl.name}"
-    scene = scene_for(referent.assets(), sim.profile, SUITE)
+    scene = scene_for(referent.assets(), setup.profile, SUITE)
     scene.reset(spec)
     toward = np.subtract(world.robot_base[:2], bowl.pos[:2])
     outer_finger = np.asarray(bowl.pos[:2]) + (kind.rim + 0.05) * toward / np.linalg.norm(toward)
     fingertip = contact.grasp_point(kind, np.asarray(bowl.pos))[2] - 0.01
     assert scene.surface_below(outer_finger, 1.5) > fingertip, "the scene no longer has the stove beside the bowl"
-    assert demonstrate(scene, ArmIK(np.asarray(sim.robot_home), sim.world), spec, referent.demo).success
+    assert demonstrate(scene, ArmIK(np.asarray(setup.robot_home), setup.world), spec, referent.demo).success
 
 
 def test_the_hand_carries_the_cheese_a_margin_clear_of_the_standing_bottle() -> None:
@@ -138,12 +138,12 @@ def test_the_hand_carries_the_cheese_a_margin_clear_of_the_standing_bottle() -> 
     the bottle; here `n=20 seed=3`'s episode 10, the bottle 13.3 cm from the plate, beside the way
     (the design since the wine bottle's tasks)."""
     referent = registry.load(SUITE)
-    sim = default_sim(referent)
-    spec = plan(referent, 20, 3, sim)[10]
+    setup = default_setup(referent)
+    spec = plan(referent, 20, 3, setup)[10]
     cheese, bottle = spec.task.params["object"], next(o.id for o in spec.objects if o.kind == "wine_bottle")
     assert spec.object(cheese).kind == "cream_cheese" and spec.object(spec.target).kind == "plate"
-    scene = scene_for(referent.assets(), sim.profile, SUITE)
-    demo = demonstrate(scene, ArmIK(np.asarray(sim.robot_home), sim.world), spec, referent.demo)
+    scene = scene_for(referent.assets(), setup.profile, SUITE)
+    demo = demonstrate(scene, ArmIK(np.asarray(setup.robot_home), setup.world), spec, referent.demo)
     assert demo.success
     gaps = []
     for state in demo.states:

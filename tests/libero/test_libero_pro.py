@@ -19,7 +19,7 @@ from core.exam import read
 from core.spec import FAST, FULL
 from eval.policies.registry import make
 from eval.scoring.battery import take
-from gen.planning.plan import world_sim
+from gen.planning.plan import world_setup
 from gen.products.canonical import CanonicalOptions, build, suite_of, trial_spec
 from helpers import initial_state_pictures, rows_of
 from jobs.cli import UserError
@@ -61,7 +61,7 @@ def test_the_perturbed_instruction_is_delivered(kind: str) -> None:
     for name in suites:
         suite = suite_of(CanonicalOptions(suite=name))
         for task in suite.tasks:
-            spec = trial_spec(suite, task, 0, 0, world_sim(suite.world))
+            spec = trial_spec(suite, task, 0, 0, world_setup(suite.world))
             assert spec.instruction == suite.problem(task).language, (name, task)
             assert spec.instruction.lower() != libero.language(task).lower(), (name, task)
 
@@ -78,7 +78,7 @@ def test_each_swap_changes_only_the_name_in_the_delivered_instruction(kind: str)
     for name in [n for n in _covered() if n.endswith(kind)]:
         suite = suite_of(CanonicalOptions(suite=name))
         for task in suite.tasks:
-            spec = trial_spec(suite, task, 0, 0, world_sim(suite.world))
+            spec = trial_spec(suite, task, 0, 0, world_setup(suite.world))
             base = libero.problem(suite.world.suite, libero.base_task(name, task))
             for cf in spec.counterfactuals:
                 said, swapped = spec.instruction.split(), cf.instruction.split()
@@ -102,7 +102,7 @@ def test_suites_that_change_no_words_deliver_the_base_tasks_instruction() -> Non
     for name in ("libero_object_swap", "libero_object_object", "libero_object_with_mug", "libero_spatial_with_milk"):
         suite = suite_of(CanonicalOptions(suite=name))
         for task in suite.tasks:
-            spec = trial_spec(suite, task, 0, 0, world_sim(suite.world))
+            spec = trial_spec(suite, task, 0, 0, world_setup(suite.world))
             assert spec.instruction == libero.language(libero.base_task(name, task)), (name, task)
 
 

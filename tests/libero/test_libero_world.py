@@ -22,7 +22,7 @@ from core.exam import read
 from core.products import ROLLOUTS
 from core.profiles import ACTION_KEY, LIBERO, STATE_KEY
 from core.rotations import yaw_quat
-from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, SimSettings, TaskSpec
+from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome, contained
 from eval.policies.registry import make
 from eval.scoring.battery import take
@@ -140,9 +140,9 @@ def _basket_spec(basket: list[float], soup: list[float]) -> EpisodeSpec:
         SceneObject("soup", "alphabet_soup", "alphabet soup", 0, tuple(soup)),
         SceneObject("basket", "basket", "basket", 1, tuple(basket)),
     )
-    sim = SimSettings(profile=LIBERO.name, cameras=LIBERO.camera_names, world=SUITE)
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world=SUITE)
     task = TaskSpec(program="pick_place", params={"destination": "basket"})
-    return EpisodeSpec(SUITE, 0, 0, objects, "soup", "", "", (), (), task, sim)
+    return EpisodeSpec(SUITE, 0, 0, objects, "soup", "", "", (), (), task, setup)
 
 
 @pytest.mark.reference

@@ -46,7 +46,7 @@ def test_the_full_look_is_recorded_wherever_the_dataset_is_rebuilt(both: dict[st
     generation = json.loads((both[FULL] / "meta/generation.json").read_text())
     assert generation["run"]["look"] == FULL and generation["config"]["look"] == FULL
     assert "look=full" in (both[FULL] / "README.md").read_text()  # the card's regenerating command and exam's
-    assert all(spec.sim.look == FULL for spec in scenes.specs(both[FULL]))
+    assert all(spec.setup.look == FULL for spec in scenes.specs(both[FULL]))
     assert "look" not in json.loads(scenes.read(both[FAST])["spec"].iloc[0])["sim"]  # fast specs keep their old JSON
 
 

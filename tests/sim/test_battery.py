@@ -16,7 +16,7 @@ import pytest
 
 from core import parquet
 from core.exam import FACES, read
-from core.spec import SimSettings
+from core.spec import Setup
 from eval.policies import Context, PolicyError
 from eval.policies.registry import make, names, register
 from eval.scoring.battery import take
@@ -38,8 +38,8 @@ def test_exam_scenes_never_occur_in_training(small_exam: Path, object_dataset: P
     exam_hashes = set(parquet.read(small_exam / "answers.parquet")["scene_hash"])
     assert exam_hashes.isdisjoint(set(scenes.read(object_dataset)["scene_hash"]))
     ref = registry.load("object")
-    train = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings())}
-    held_out = {s.scene_hash for s in plan(ref, 300, seed=7, sim=SimSettings(), split="exam")}
+    train = {s.scene_hash for s in plan(ref, 300, seed=7, setup=Setup())}
+    held_out = {s.scene_hash for s in plan(ref, 300, seed=7, setup=Setup(), split="exam")}
     assert train.isdisjoint(held_out)
 
 
@@ -242,7 +242,7 @@ def test_a_verb_exams_horizon_does_not_tell_the_program(tmp_path: Path) -> None:
     exam = read(make_dataset(tmp_path / "verb-exam", "referent=verb", "n=4", "split=exam", "seed=2", "image_size=32"))
     assert (exam.trials[exam.trials["face"] != "switch"].groupby("trial")["max_steps"].nunique() == 1).all()
     spec = EpisodeSpec.from_json(exam.trials["spec"].iloc[0])
-    scene, ik = scene_for(spec.assets), ArmIK(np.asarray(spec.sim.robot_home))
+    scene, ik = scene_for(spec.assets), ArmIK(np.asarray(spec.setup.robot_home))
     for _, row in exam.trials[exam.trials["face"].isin(["task", "swap"])].iterrows():
         spec = EpisodeSpec.from_json(row["spec"])
         asked = dataclasses.replace(spec, target=row["target"], task=dataclasses.replace(spec.task, program=row["program"]))

@@ -16,7 +16,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 from core.exam import read
 from core.profiles import ACTION_KEY, AGENTVIEW, LIBERO, NATIVE, OSC_POS_LIMIT, STATE_KEY
 from core.programs import succeeded
-from core.spec import EpisodeSpec, SimSettings
+from core.spec import EpisodeSpec, Setup
 from eval.env import ExamEnv
 from eval.policies.registry import make
 from eval.scoring.battery import take
@@ -61,7 +61,7 @@ def test_recorded_deltas_replay_through_the_controller_to_the_same_success(liber
         spec = EpisodeSpec.from_json(rec.spec)
         rows = reader.data[reader.data.episode_index == rec.episode_index]
         actions, states = np.stack(rows[ACTION_KEY].to_numpy()), np.stack(rows[STATE_KEY].to_numpy())
-        scene = scene_for(spec.assets, spec.sim.profile)
+        scene = scene_for(spec.assets, spec.setup.profile)
         seen: list[np.ndarray] = []
         outcome = replay(scene, spec, actions, observe=lambda t: seen.append(scene.state().astype(np.float32)))
         assert np.array_equal(np.stack(seen), states), f"episode {rec.episode_index}: states differ on replay"
@@ -112,9 +112,9 @@ def test_the_drive_moves_the_arm_as_robosuites_own_controller(libero_dataset: Pa
     actions = np.stack(LeRobotReader(libero_dataset).data.query("episode_index == 0")[ACTION_KEY].to_numpy())
     paths = []
     for drive in (None, Robosuites):
-        scene = scene_for(spec.assets, spec.sim.profile)
+        scene = scene_for(spec.assets, spec.setup.profile)
         if drive is not None:
-            scene = type(scene)(spec.assets, spec.sim.profile)
+            scene = type(scene)(spec.assets, spec.setup.profile)
             scene.drive = drive(scene.model, scene.data)
         scene.reset(spec)
         path = []
@@ -130,7 +130,7 @@ def test_frames_are_mirrored_as_in_lerobots_libero_datasets() -> None:
     degrees: upright, mirrored left to right. An object on the robot's left (+y), which an
     upright agentview shows on the right, must be on the left of a libero frame."""
     ref = registry.load("object")
-    spec = plan(ref, 1, seed=0, sim=SimSettings(image_size=64))[0]
+    spec = plan(ref, 1, seed=0, setup=Setup(image_size=64))[0]
     left = max(spec.objects, key=lambda o: o.pos[1])
     frames = {}
     for profile, cams in (("native", NATIVE.camera_names), ("libero", LIBERO.camera_names)):

@@ -105,10 +105,13 @@ def test_a_switch_the_oracle_cannot_finish_is_left_out_saying_why(exam: Path) ->
     away = spec.choice(spec.counterfactuals[0])[0]
     objects = tuple(dataclasses.replace(o, pos=(o.pos[0] + 1.5, *o.pos[1:])) if o.id == away else o for o in spec.objects)
     moved = dataclasses.replace(spec, objects=objects)
-    scene, ik = Scene(moved.assets, moved.sim.profile, moved.sim.world), ArmIK(np.asarray(moved.sim.robot_home), moved.sim.world)
+    scene, ik = (
+        Scene(moved.assets, moved.setup.profile, moved.setup.world),
+        ArmIK(np.asarray(moved.setup.robot_home), moved.setup.world),
+    )
     scene.reset(moved)
     state = scene.physics_state().astype(np.float64).tolist()
-    kept, why = switch_rows(scene, ik, registry.load(moved.referent, world=moved.sim.world), moved, state, 0, 1)
+    kept, why = switch_rows(scene, ik, registry.load(moved.referent, world=moved.setup.world), moved, state, 0, 1)
     assert kept == () and "the oracle does not achieve" in why and "switched or not" in why, why
 
 
@@ -119,7 +122,7 @@ def test_the_gymnasium_env_shows_the_new_instruction_from_the_switch_step(exam: 
     switch = json.loads(row[SWITCH])
     env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=str(exam), row=int(row["row"]))
     _, info = env.reset()
-    hold = env.unwrapped.features.hold_action(env.unwrapped.episode.sim.robot_home)
+    hold = env.unwrapped.features.hold_action(env.unwrapped.episode.setup.robot_home)
     seen = [info["instruction"]]
     for _ in range(switch["step"] + 1):
         _, _, _, _, info = env.step(hold)

@@ -18,7 +18,7 @@ import pytest
 from core import programs, worlds
 from core.exam import PUBLIC_COLUMNS, SWITCH, read
 from gen.config import GenConfig
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from helpers import SMALL_EXAM, Shared
 from referents import registry
 
@@ -167,7 +167,7 @@ def test_a_scenes_object_order_is_the_scenes_not_the_answers(name: str) -> None:
     """The objects of a trial's public scene come in slot order or in one fixed order of their
     ids, so where the target stands in the list says no more than its slot or its name."""
     referent = registry.load(name)
-    scenes = [spec.public() for spec in plan(referent, 24, 0, default_sim(referent), split="exam")]
+    scenes = [spec.public() for spec in plan(referent, 24, 0, default_setup(referent), split="exam")]
     by_slot = all([o.slot for o in s.objects] == sorted(o.slot for o in s.objects) for s in scenes)
     before = {(a.id, b.id) for s in scenes for i, a in enumerate(s.objects) for b in s.objects[i + 1 :]}
     by_id = not any((b, a) in before for a, b in before)
@@ -247,7 +247,7 @@ def test_every_key_of_the_envs_info_is_in_the_exam_format_doc(exams: dict[str, P
 
     env = gym.make("deconfound_exam:deconfound/Exam-v0", exam=str(exams["object"]), row=0)
     _, reset_info = env.reset()
-    _, _, _, _, info = env.step(np.append(env.unwrapped.episode.sim.robot_home, -1.0).astype(np.float32))
+    _, _, _, _, info = env.step(np.append(env.unwrapped.episode.setup.robot_home, -1.0).astype(np.float32))
     env.close()
     observations = doc_section("Observations and actions")
     assert [k for k in {*reset_info, *info} if f"`{k}`" not in observations] == []

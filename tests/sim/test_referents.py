@@ -12,7 +12,7 @@ from core import worlds
 from core.programs import succeeded
 from core.spec import EpisodeSpec
 from gen.planning.audit import audit
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from helpers import visible_bodies
 from oracle.episode import replay
 from oracle.scene import scene_for
@@ -31,7 +31,7 @@ def test_all_nine_types_exist_and_each_world_has_its_own() -> None:
 @pytest.fixture(scope="module", params=TYPES)
 def planned(request: pytest.FixtureRequest) -> tuple[registry.Referent, list[EpisodeSpec]]:
     ref = registry.load(request.param)
-    return ref, plan(ref, 300, seed=1, sim=default_sim(ref))
+    return ref, plan(ref, 300, seed=1, setup=default_setup(ref))
 
 
 def test_every_value_is_target_and_distractor_across_slots(planned: tuple) -> None:
@@ -81,15 +81,15 @@ def test_counterfactuals_ask_for_something_else_in_the_scene(planned: tuple) -> 
 @pytest.mark.parametrize("name", TYPES)
 def test_all_objects_in_view_and_do_nothing_fails(name: str) -> None:
     ref = registry.load(name)
-    sim = default_sim(ref)
-    scene = scene_for(ref.assets(), sim.profile, sim.world)
-    for spec in plan(ref, 3, seed=4, sim=sim):
+    setup = default_setup(ref)
+    scene = scene_for(ref.assets(), setup.profile, setup.world)
+    for spec in plan(ref, 3, seed=4, setup=setup):
         scene.reset(spec)
         visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
             bodies = {int(scene.model.geom_bodyid[g]) for g in scene.placed[obj.id].geom_ids}
             assert sum(visible.get(b, 0) for b in bodies) >= 8, f"{name}: {obj.id} not visible"
-        still = np.tile(sim.interface.hold_action(sim.robot_home), (30, 1))
+        still = np.tile(setup.interface.hold_action(setup.robot_home), (30, 1))
         outcome = replay(scene, spec, still)
         assert not succeeded(spec, outcome)
         for cf in spec.counterfactuals:
@@ -104,7 +104,7 @@ def _achieved(spec: EpisodeSpec, outcome, cf) -> bool:
 
 def test_position_confound_is_flagged() -> None:
     ref = registry.load("object", overrides={"confound": "position"})
-    specs = plan(ref, 200, seed=0, sim=default_sim(ref))
+    specs = plan(ref, 200, seed=0, setup=default_setup(ref))
     assert {s.object(s.target).slot for s in specs} == {ref.config.layout.canonical_slot}
     report = audit(ref, specs)
     assert "slot" in report["leaks"] and report["verdict"].startswith("leak: ")
@@ -113,7 +113,7 @@ def test_position_confound_is_flagged() -> None:
 
 def test_holdout_and_distractor_only() -> None:
     ref = registry.load("color", overrides={"holdout": ["purple"], "distractor_only": ["orange"]})
-    specs = plan(ref, 120, seed=0, sim=default_sim(ref))
+    specs = plan(ref, 120, seed=0, setup=default_setup(ref))
     colors = Counter(o.attributes["color"] for s in specs for o in s.objects)
     targets = Counter(s.object(s.target).attributes["color"] for s in specs)
     assert "purple" not in colors
@@ -127,7 +127,7 @@ def test_restricted_targets_make_every_identity_leak_expected() -> None:
     """Families are declared with the features: the co-appearing categories of a category scene
     are identity, though no word in their name says so."""
     ref = registry.load("category", overrides={"targets": ["toy"]})
-    report = audit(ref, plan(ref, 120, seed=0, sim=default_sim(ref)))
+    report = audit(ref, plan(ref, 120, seed=0, setup=default_setup(ref)))
     leaked = {v["variable"]: v["expected"] for v in report["variables"] if v["leak"]}
     assert {"identity", "co-appearing categories"} <= set(leaked) and all(leaked.values())
     assert not report["unexpected_leaks"]
@@ -140,5 +140,5 @@ def test_unsupported_confound_is_refused() -> None:
 
 def test_tiny_plans_get_no_verdict() -> None:
     ref = registry.load("object")
-    report = audit(ref, plan(ref, 5, seed=5, sim=default_sim(ref)))
+    report = audit(ref, plan(ref, 5, seed=5, setup=default_setup(ref)))
     assert report["verdict"].startswith("too few episodes") and not report["leaks"]

@@ -54,9 +54,9 @@ def _log(row: pd.Series, mode: str, located: list[float] | None = None) -> dict:
 
 def _contact(spec: EpisodeSpec, objects: dict[str, np.ndarray], target: str, program: str) -> np.ndarray:
     """Where the oracle's hand meets `target` at the rollout's end: its grasp point, or over a destination the release point."""
-    kind = worlds.kind(spec.object(target).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(target).kind, spec.setup.world)
     if program == "place":
-        carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.sim.world)
+        carried = worlds.kind(spec.object(spec.task.params["object"]).kind, spec.setup.world)
         return contact.release_point(kind, objects[target][1], carried)
     return contact.grasp_point(kind, objects[target][1])
 

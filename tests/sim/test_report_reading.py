@@ -40,7 +40,7 @@ def _log(row: pd.Series, mode: str) -> dict:
     spec = EpisodeSpec.from_json(row["spec"])
     start = {o.id: np.asarray(o.pos, float) for o in spec.objects}
     end = {k: v + ([0.0, 0.0, 0.1] if mode == "achieved" and k == row["target"] else 0.0) for k, v in start.items()}
-    kind = worlds.kind(spec.object(row["target"]).kind, spec.sim.world)
+    kind = worlds.kind(spec.object(row["target"]).kind, spec.setup.world)
     point = contact.grasp_point(kind, end[row["target"]])
     lift = {"achieved": 0.0, "2cm": 0.01, "5cm": 0.035}
     ee = [list(row["initial_ee"]), (point + [0.0, 0.0, lift[mode]]).tolist() if mode in lift else list(row["initial_ee"])]

@@ -10,9 +10,9 @@ import pytest
 
 from core import worlds
 from core.profiles import NATIVE, PROFILES
-from core.spec import SimSettings
+from core.spec import Setup
 from core.worlds.native import TABLE_TOP_Z
-from gen.planning.plan import default_sim, plan
+from gen.planning.plan import default_setup, plan
 from helpers import visible_bodies
 from oracle.render import Cameras
 from oracle.scene import Scene, _hull_distance, scene_for, spec_scene
@@ -66,7 +66,7 @@ def test_catalog_extents_match_the_models(world: str) -> None:
 
 
 def test_every_object_is_in_frame_and_parked_ones_are_not(scene: Scene) -> None:
-    for spec in plan(registry.load("object"), 4, seed=2, sim=SimSettings()):
+    for spec in plan(registry.load("object"), 4, seed=2, setup=Setup()):
         scene.reset(spec)
         visible = visible_bodies(scene, "agentview")
         for obj in spec.objects:
@@ -85,23 +85,23 @@ def test_each_object_projects_onto_its_own_pixels(name: str) -> None:
     each object's pixels in the rendered frames: a lookat camera, and LIBERO's quat camera in its
     mirrored profile."""
     referent = registry.load(name)
-    sim = default_sim(referent)
-    camera = PROFILES[sim.profile].agentview
-    for spec in plan(referent, 2, seed=3, sim=sim):
+    setup = default_setup(referent)
+    camera = PROFILES[setup.profile].agentview
+    for spec in plan(referent, 2, seed=3, setup=setup):
         scene = spec_scene(spec)
         scene.reset(spec)
         cams = Cameras(scene, 128, (camera,))
         labels = cams.labels()[camera]
         cams.close()
         objects = [o for o in spec.objects if o.id in scene.placed]
-        pixels = worlds.world(sim.world).agentview.project(np.array([o.pos for o in objects]), 128, sim.interface.mirrored)
+        pixels = worlds.world(setup.world).agentview.project(np.array([o.pos for o in objects]), 128, setup.interface.mirrored)
         for obj, (column, row) in zip(objects, pixels):
             near = labels[int(row) - 2 : int(row) + 3, int(column) - 2 : int(column) + 3]
             assert (near == scene.model.body(scene.placed[obj.id].body_id).name.removesuffix("_main")).any(), obj.id
 
 
 def test_reset_poses_objects_from_the_spec(scene: Scene) -> None:
-    for spec in plan(registry.load("object"), 3, seed=4, sim=SimSettings()):
+    for spec in plan(registry.load("object"), 3, seed=4, setup=Setup()):
         scene.reset(spec)
         for obj in spec.objects:
             np.testing.assert_allclose(scene.object_pos(obj.id), obj.pos, atol=1e-9)
@@ -110,7 +110,7 @@ def test_reset_poses_objects_from_the_spec(scene: Scene) -> None:
 
 
 def test_cameras_render_distinct_views(scene: Scene) -> None:
-    spec = plan(registry.load("object"), 1, seed=0, sim=SimSettings())[0]
+    spec = plan(registry.load("object"), 1, seed=0, setup=Setup())[0]
     scene.reset(spec)
     cams = Cameras(scene, 64, ("agentview", "wrist"))
     frames = {k: v.copy() for k, v in cams.render().items()}

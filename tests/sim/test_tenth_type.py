@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from core import parquet, programs
-from core.spec import SimSettings
+from core.spec import Setup
 from gen.planning.plan import designs, plan
 from gen.products import scenes
 from helpers import make_dataset
@@ -67,7 +67,7 @@ def tenth_type(folder: Path, module: str = MODULE, spec: dict | None = None) -> 
 def test_a_type_beside_its_spec_plans_and_its_demo_is_found_by_path(tmp_path: Path) -> None:
     path = tenth_type(tmp_path)
     ref = registry.load("ignored", str(path))
-    specs = plan(ref, 8, seed=0, sim=SimSettings())
+    specs = plan(ref, 8, seed=0, setup=Setup())
     assert {s.referent for s in specs} == {"size"} and "size" not in registry.available()
     assert {s.object(s.target).attributes["size"] for s in specs} == {"small", "big"}
     assert ref.assets() == (("block_large", 1), ("block_small", 1))

@@ -84,6 +84,9 @@ def _others(cfg: ReferentConfig) -> list[Placement]:
 
 
 def validate(cfg: ReferentConfig) -> None:
+    gap = cfg.extra.get("min_gap", 0.12)
+    if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not gap >= 0:
+        raise cfg.fail("min_gap", f"must be a distance in metres (>= 0), got {gap!r}")
     try:
         found = _places(cfg, elsewhere=True)
     except (KeyError, TypeError, AttributeError):
