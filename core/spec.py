@@ -123,12 +123,25 @@ class EpisodeSpec:
     attempt: int = 0
     split: str = "train"
     version: int = SPEC_VERSION
+    # A training episode whose instruction changes mid-course (`switched=`): the counterfactual it
+    # becomes where the hand has come near what it first takes hold of (oracle/episode.py); None
+    # for the rest, whose JSON and hash stay what they always were.
+    switch: int | None = None
 
     def choice(self, cf: Counterfactual | None = None) -> tuple[str, str]:
         """(object, program) the instruction, or a counterfactual of it, asks for."""
         if cf is None:
             return self.target, self.task.program
         return cf.target, cf.program or self.task.program
+
+    def after_switch(self) -> EpisodeSpec:
+        """The episode as asked once its instruction has changed (itself when it never does): the
+        counterfactual's words, target and program, in the same scene."""
+        if self.switch is None:
+            return self
+        cf = self.counterfactuals[self.switch]
+        target, program = self.choice(cf)
+        return replace(self, target=target, instruction=cf.instruction, task=replace(self.task, program=program), switch=None)
 
     def object(self, object_id: str) -> SceneObject:
         for obj in self.objects:
@@ -139,7 +152,9 @@ class EpisodeSpec:
     def public(self) -> EpisodeSpec:
         """The scene alone, as a policy may see it: objects, poses, inventory and setup,
         with the answer (target, instruction, counterfactuals, task) withheld."""
-        return replace(self, target="", instruction="", template="", counterfactuals=(), task=TaskSpec(program="", params={}))
+        return replace(
+            self, target="", instruction="", template="", counterfactuals=(), task=TaskSpec(program="", params={}), switch=None
+        )
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -150,6 +165,8 @@ class EpisodeSpec:
             del d["sim"]["world"]
         if self.setup.look == FAST:  # and those drawn with the fast look, which is all there was before `look`
             del d["sim"]["look"]
+        if self.switch is None:  # and those whose instruction never changes
+            del d["switch"]
         return d
 
     def to_json(self) -> str:
@@ -205,6 +222,9 @@ class EpisodeSpec:
             version = d["version"]
             if version != SPEC_VERSION:
                 raise SpecError(f"episode spec version {version} is not supported (expected {SPEC_VERSION})")
+            switch = d.get("switch")
+            if switch is not None and not 0 <= int(switch) < len(d["counterfactuals"]):
+                raise SpecError(f"episode spec's switch {switch} names no counterfactual (it has {len(d['counterfactuals'])})")
             return cls(
                 referent=str(d["referent"]),
                 index=int(d["index"]),
@@ -242,6 +262,7 @@ class EpisodeSpec:
                 attempt=int(d["attempt"]),
                 split=str(d.get("split", "train")),
                 version=version,
+                switch=None if switch is None else int(switch),
             )
         except SpecError:
             raise

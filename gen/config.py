@@ -54,6 +54,7 @@ class GenConfig:
     world: Optional[str] = None  # native, libero_goal, libero_object, libero_spatial: one carrying the type; default its own
     look: str = FAST  # fast | full: every mesh whole and reflections, as the world's own simulator draws (core/spec.py)
     switches: Optional[int] = None  # split=exam: switch rows per trial (the instruction changed mid-course); default 1, 0 none
+    switched: float = 0.0  # split=train: the share of episodes whose instruction changes mid-course, the oracle changing course
 
     def spec_overrides(self) -> dict:
         """The options that edit the referent spec."""
@@ -129,6 +130,10 @@ def validate(cfg: GenConfig) -> None:
     if cfg.switches is not None and (cfg.split != "exam" or cfg.switches < 0):
         got = f"switches={cfg.switches} with split={cfg.split}"
         raise UserError(f"switches= sizes an exam's switch rows (split=exam, 0 or more), got {got}")
+    if isinstance(cfg.switched, bool) or not isinstance(cfg.switched, (int, float)) or not 0 <= cfg.switched <= 1:
+        raise UserError(f"switched= is the share of episodes that change course, in [0, 1], got {cfg.switched!r}")
+    if cfg.switched and cfg.split != "train":
+        raise UserError(f"switched={cfg.switched} changes a training set's episodes; an exam's switches are switches= rows")
     if cfg.split == "exam" and cfg.plan_only:
         raise UserError("plan_only=true and split=exam do not combine: an exam is already simulation-free to read")
     if cfg.workers is None:

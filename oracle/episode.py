@@ -9,12 +9,13 @@ MuJoCo is deterministic: replaying the recorded actions reproduces the same stat
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from core import programs
 from core.demo import DemoScript
+from core.exam import SWITCH_DISTANCE
 from core.programs import succeeded
 from core.spec import EpisodeSpec
 from core.success import Outcome
@@ -31,6 +32,7 @@ class Demo:
     outcome: Outcome | None  # None when the script could not be executed (e.g. IK failed)
     success: bool
     failure: str = ""
+    switch_step: int | None = None  # the first action after the instruction changed (a switched spec's)
 
 
 def measure(scene: Scene, start: dict[str, tuple[float, float, float]]) -> Outcome:
@@ -51,7 +53,10 @@ def demonstrate(
     after `settle` steps that hold the arm still (a profile's settle steps) and the actions of
     `prefix` (what ran before a plan changed course: the demo holds the actions after them, which
     first raise the hand over the objects, and its IK may start from the arm's home pose where the
-    arm's own pose leads nowhere)."""
+    arm's own pose leads nowhere). A spec that switches (`EpisodeSpec.switch`) changes course on
+    the way (`change_course`)."""
+    if spec.switch is not None and not len(prefix):
+        return change_course(scene, ik, spec, script, state, settle)
     scene.reset(spec)
     if state is not None:
         scene.set_physics_state(state)
@@ -93,6 +98,32 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
 
 
 MOVED = 0.01  # m: how far the thing a program acts on must move before the hand counts as holding it
+
+
+def change_course(
+    scene: Scene, ik: ArmIK, spec: EpisodeSpec, script: DemoScript, state: np.ndarray | None = None, settle: int = 0
+) -> Demo:
+    """A switched spec's demonstration: the first instruction's up to where the hand first comes
+    within the exam's SWITCH_DISTANCE of what it takes hold of (`approach_step`: the approach has
+    committed and nothing is held yet, where an exam's switch rows change the instruction too),
+    then the oracle's replanned course to the second instruction's ask, by which it is judged."""
+    first = demonstrate(scene, ik, replace(spec, switch=None), script, state, settle)
+    if not first.success:
+        return replace(first, spec=spec, failure=f"before its switch: {first.failure}")
+    step = approach_step(scene, first, SWITCH_DISTANCE)
+    if not step:
+        why = "the hand starts there" if step == 0 else "what it acts on never moves"
+        return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
+    then = demonstrate(scene, ik, spec.after_switch(), script, state, settle, first.actions[:step])
+    return Demo(
+        spec,
+        np.concatenate([first.actions[:step], then.actions]),
+        np.concatenate([first.states[:step], then.states]),
+        then.outcome,
+        then.success,
+        then.failure and f"switched at step {step}: {then.failure}",
+        step,
+    )
 
 
 def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:

@@ -29,3 +29,4 @@ class Design:
     instruction: str
     counterfactuals: tuple[Counterfactual, ...]
     task: TaskSpec | None = None  # None: the referent's task
+    switch: int | None = None  # the counterfactual the instruction becomes mid-course (gen's `switched=`)

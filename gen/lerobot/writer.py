@@ -88,6 +88,7 @@ class Episode:
     actions: np.ndarray  # (T, A) float32
     videos: dict[str, bytes]  # camera -> mp4 of this episode alone
     histograms: dict[str, np.ndarray]  # camera -> (3, 256) pixel counts
+    switch: tuple[int, str] | None = None  # (frame, task from that frame on): the instruction changed mid-course
 
     @property
     def length(self) -> int:
@@ -134,7 +135,12 @@ class LeRobotWriter:
         """Append an episode; returns its episode_index."""
         index = len(self.episodes)
         length = episode.length
-        task_index = self.tasks.setdefault(episode.task, len(self.tasks))
+        task_index = np.full(length, self.tasks.setdefault(episode.task, len(self.tasks)), np.int64)
+        tasks = [episode.task]
+        if episode.switch is not None:  # each frame holds the instruction it was shown
+            step, then = episode.switch
+            task_index[step:] = self.tasks.setdefault(then, len(self.tasks))
+            tasks.append(then)
         columns = {
             "observation.state": episode.states.astype(np.float32),
             "action": episode.actions.astype(np.float32),
@@ -142,9 +148,9 @@ class LeRobotWriter:
             "frame_index": np.arange(length, dtype=np.int64),
             "episode_index": np.full(length, index, np.int64),
             "index": np.arange(self.frames, self.frames + length, dtype=np.int64),
-            "task_index": np.full(length, task_index, np.int64),
+            "task_index": task_index,
         }
-        row: dict = {"episode_index": index, "tasks": [episode.task], "length": length}
+        row: dict = {"episode_index": index, "tasks": tasks, "length": length}
         row.update(self._write_data(columns))
         for cam in self.recording.cameras:
             row.update(self._write_video(cam, episode.videos[cam]))

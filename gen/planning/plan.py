@@ -19,7 +19,7 @@ import numpy as np
 from core import profiles, worlds
 from core.spec import FAST, EpisodeSpec, SceneObject, Setup
 from gen.config import GenConfig, load_referent
-from gen.planning import mix
+from gen.planning import mix, switches
 from gen.planning.audit import audit
 from jobs.cli import UserError
 from referents.balance import Balance
@@ -83,6 +83,7 @@ def realize(
         setup=setup,
         attempt=attempt,
         split=split,
+        switch=design.switch,
     )
 
 
@@ -113,6 +114,11 @@ class Planned:
         """The share of a plan of one type (an exam's: exams are made one type at a time)."""
         (share,) = self.shares
         return share
+
+    @property
+    def switched(self) -> bool:
+        """Whether any episode's instruction changes mid-course (gen/planning/switches.py)."""
+        return any(spec.switch is not None for spec in self.specs)
 
     @property
     def recording(self) -> Setup:
@@ -146,7 +152,7 @@ def default_setup(referent: Referent) -> Setup:
     return world_setup(worlds.world(referent.config.world))
 
 
-def check_audit(report: dict) -> None:
+def check_audit(report: dict, answer: str = "the target") -> None:
     """A plan whose audit finds a leak nobody asked for is refused, naming the variable."""
     if report["unexpected_leaks"]:
         worst = {v["variable"]: v for v in report["variables"]}
@@ -154,7 +160,7 @@ def check_audit(report: dict) -> None:
             f"{name} (held-out accuracy {worst[name]['rate']:.0%} vs chance {report['chance']:.0%})"
             for name in report["unexpected_leaks"]
         )
-        raise UserError(f"the {report['referent']} plan fails its confound audit: {detail} predicts the target")
+        raise UserError(f"the {report['referent']} plan fails its confound audit: {detail} predicts {answer}")
 
 
 def plan_and_audit(cfg: GenConfig) -> Planned:
@@ -167,7 +173,7 @@ def plan_and_audit(cfg: GenConfig) -> Planned:
             roles.append(designs(referent, one.n, one.seed, one.split, stream=referent.label if mixed else None))
         except ReferentSpecError as exc:
             raise UserError(str(exc)) from None
-    episodes, k = mix.interleave(roles), len(types)
+    episodes, k = switches.switched(mix.interleave(roles), cfg.switched, cfg.seed), len(types)
     specs = []
     for i, design in enumerate(episodes):
         referent, setup = types[mix.turn(i, k)]
@@ -176,7 +182,12 @@ def plan_and_audit(cfg: GenConfig) -> Planned:
         print(f"auditing the plan of {cfg.n} episodes ...", file=sys.stderr)
     shares = []
     for place, (referent, setup) in enumerate(types):
-        report = audit(referent, mix.share(specs, place, k))
+        own = mix.share(specs, place, k)
+        report = audit(referent, own)
         check_audit(report)
+        second = [spec.after_switch() for spec in own if spec.switch is not None]
+        if second:  # the targets after a switch are audited as the first ones are
+            report["switched"] = audit(referent, second)
+            check_audit(report["switched"], "the target after a switch")
         shares.append(Share(referent, setup, report))
     return Planned(tuple(shares), episodes, specs)

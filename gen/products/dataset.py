@@ -165,8 +165,9 @@ def _assemble(cfg: GenConfig, planned: Planned, partial: Partial, root: Path) ->
         root, Recording(setup.fps, setup.image_size, setup.cameras, features.state_names, features.action_names, cfg.codec)
     )
     rows, written = [], []
+    mixed, switched = len(planned.shares) > 1, planned.switched
     for produced in partial.episodes(cfg.n):
-        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced, mixed=len(planned.shares) > 1))
+        rows.append(scenes.row(writer.add(produced.episode), produced.spec, produced, mixed, switched))
         written.append(produced.spec)
         faults.point(f"assemble:{len(rows) - 1}")
     writer.finalize()

@@ -32,7 +32,7 @@ def build(planned: Planned, provenance: Provenance, out: Path, started: float) -
     with staging(out) as root:
         (root / "meta").mkdir(parents=True)
         mixed = len(planned.shares) > 1
-        scenes.write(root, [scenes.row(i, spec, mixed=mixed) for i, spec in enumerate(planned.specs)])
+        scenes.write(root, [scenes.row(i, spec, None, mixed, planned.switched) for i, spec in enumerate(planned.specs)])
         records = audits(planned)
         write_audit(root, records)
         audited = [(referent, record["planned"]) for referent, record in records]

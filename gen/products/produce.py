@@ -99,6 +99,7 @@ class Producer:
             actions=actions,
             videos={c: encode_episode(f, self.setup.fps, self.codec) for c, f in frames.items()},
             histograms={c: image_histogram(f) for c, f in frames.items()},
+            switch=None if demo.switch_step is None else (demo.switch_step, spec.after_switch().instruction),
         )
         assert demo.outcome is not None
         return Produced(spec, failures, episode, demo.states[0], demo.outcome)

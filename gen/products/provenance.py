@@ -28,7 +28,7 @@ DETERMINING = ("referent", "n", "seed", "image_size", "fps", "codec", "max_attem
 # Options a command line spells as a list.
 LIST_OPTIONS = ("holdout", "distractor_only", "targets")
 # What the exam of a dataset does not inherit from it: its size, random stream and confounds.
-NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only", "switches")
+NOT_INHERITED_BY_EXAM = ("n", "seed", "plan_only", "split", "confound", "holdout", "distractor_only", "switches", "switched")
 
 
 def run_record(cfg: GenConfig) -> dict:
@@ -42,6 +42,8 @@ def run_record(cfg: GenConfig) -> dict:
         record["look"] = cfg.look
     if cfg.switches is not None:
         record["switches"] = cfg.switches
+    if cfg.switched:
+        record["switched"] = cfg.switched
     if cfg.spec:
         record["spec_text"] = Path(cfg.spec).read_text()
     return record
@@ -94,7 +96,7 @@ class Provenance:
         if cfg.world is not None and not own:
             parts.append(("world", f"world={cfg.world}"))  # a type's own world goes unsaid
         implied = {"profile": worlds.world(cfg.world or "native").profiles[0]}  # a world's default profile goes unsaid
-        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look", "switches"):
+        for name in ("codec", "spec", "objects_per_scene", "confound", "split", "profile", "look", "switches", "switched"):
             value = getattr(cfg, name)
             if isinstance(value, list):  # a mix's confounds, one per type
                 parts.append((name, f"'{name}=[{','.join('null' if v is None else v for v in value)}]'"))
@@ -133,13 +135,21 @@ class Provenance:
             f"| seed | {self.config.seed} |\n| simulator | mujoco {v['mujoco']}, robosuite {v['robosuite']} |"
         )
 
+    def _config(self) -> dict:
+        """The options as meta/generation.json records them: `switched` only where episodes change
+        course, so the records of the rest stay what they were before it."""
+        config = asdict(self.config)
+        if not self.config.switched:
+            del config["switched"]
+        return config
+
     def generation(self, episodes: int, failed_attempts: int, seconds: float) -> dict:
         """`meta/generation.json`: what regenerates the product, and that it is complete."""
         v = self.versions
         return {
             "generator": "deconfound",
             **v,
-            "config": asdict(self.config),
+            "config": self._config(),
             "referent_spec": self.referent_spec,
             "plan_only": self.config.plan_only,
             "run": run_record(self.config),

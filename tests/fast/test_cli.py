@@ -50,6 +50,9 @@ def _untouched(out: Path) -> bool:
         (["referent=color", "world=libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
         (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
         (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
+        (["switched=1.5"], "switched= is the share of episodes that change course, in [0, 1], got 1.5"),
+        (["switched=-0.2"], "switched= is the share of episodes that change course, in [0, 1], got -0.2"),
+        (["switched=0.3", "split=exam"], "switched=0.3 changes a training set's episodes; an exam's switches are switches= rows"),
     ],
 )
 def test_bad_options_get_one_line(tmp_path: Path, args: list[str], needle: str) -> None:
