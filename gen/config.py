@@ -97,6 +97,8 @@ def validate(cfg: GenConfig) -> None:
     if not isinstance(cfg.referent, str):
         _validate_mix(cfg)
         return
+    if cfg.confound is not None and not isinstance(cfg.confound, (str, list)):
+        raise UserError(f"confound must name a shortcut (position, layout), or one per type of a list, got {cfg.confound!r}")
     if cfg.confound is not None and not isinstance(cfg.confound, str):
         listed = mix.listed(cfg.confound, "confound")
         raise UserError(f"{listed} is one per type of a referent list; {cfg.referent} is one type: give one")

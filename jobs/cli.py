@@ -51,7 +51,7 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
     for arg in argv:
         key = arg.split("=", 1)[0].lstrip("+~")
         if "=" in arg and key in seen:
-            raise UserError(f"option {key!r} is given twice ({seen[key]} and {arg}); give it once")
+            raise UserError(f"option {key!r} is given twice ({_shown(seen[key])} and {_shown(arg)}); give it once")
         seen[key] = arg
     argv = [_listed(arg, _list_options(schema)) for arg in argv]
     ConfigStore.instance().store(name=name, node=schema)
@@ -63,6 +63,12 @@ def compose_config(name: str, schema: type[T], argv: list[str]) -> T:
         raise UserError(_one_line(exc, schema)) from None
     _refuse_empty_out(options, seen)
     return options
+
+
+def _shown(arg: str) -> str:
+    """An option as typed, quoted where it holds a line break or another unprintable character,
+    so the message stays one line."""
+    return arg if arg.isprintable() else repr(arg)
 
 
 def _refuse_empty_out(options: object, given: dict[str, str]) -> None:

@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import asdict
 from pathlib import Path
 
 import mujoco
@@ -253,13 +254,12 @@ def liberos_replay(dataset: Path, world: World) -> dict:
         records = records[records["world"] == world.name]
     episodes = []
     for record in records.itertuples():
-        scene, task = json.loads(record.scene), json.loads(record.spec)["task"]
+        final = EpisodeSpec.from_json(record.spec).after_switch()  # a switched episode is judged by its second ask
+        scene, task, target = json.loads(record.scene), asdict(final.task), final.target
         params = task["params"]
         instance = {o["id"]: sites.get(o["kind"], o["instance"]) for o in scene["objects"]}
         kinds = {o["id"]: o["kind"] for o in scene["objects"]}
-        moved, goal = (
-            (params.get("object"), record.target) if "destination" not in params else (record.target, params["destination"])
-        )
+        moved, goal = (params.get("object"), target) if "destination" not in params else (target, params["destination"])
         rows = reader.data[reader.data.episode_index == record.episode_index]
         episode = {
             "objects": [

@@ -47,8 +47,9 @@ class Frames:
     starts: np.ndarray  # first frame of each episode
     ends: np.ndarray  # one past the last frame of each episode
     stats: dict[str, dict[str, np.ndarray]]
-    target: np.ndarray | None  # (episodes, 3) where each episode's target starts, from meta/scenes.parquet
-    target_world: np.ndarray | None  # (episodes,) the world each episode's scene is in (a mix's may differ)
+    target: np.ndarray | None  # (aims, 3) where each target starts, from meta/scenes.parquet: one per episode, one more
+    target_world: np.ndarray | None  # (aims,) per switched episode (its second); the world of each target's scene
+    aim: np.ndarray | None  # (N,) each frame's row of `target`: what its instruction names at that frame
     referent: np.ndarray | None  # (episodes,) each episode's referent type (a mix's differ), from meta/scenes.parquet
     source: np.ndarray  # the dataset each frame comes from (index into `sources`)
     sources: list[str]
@@ -178,6 +179,7 @@ def union(parts: list[Frames]) -> Frames:
     episode_offsets = np.cumsum([0] + [len(p.starts) for p in parts])
     targets = [p.target for p in parts]
     scene_worlds = [p.target_world for p in parts]
+    aim_offsets = np.cumsum([0] + [0 if p.target is None else len(p.target) for p in parts])
     referents = [p.referent for p in parts]
     # one camera at a time, dropping each part's copy as it goes: the union costs half a copy more, not two
     images = {c: np.concatenate([p.images.pop(c) for p in parts]) for c in list(parts[0].images)}
@@ -193,6 +195,7 @@ def union(parts: list[Frames]) -> Frames:
         stats=_pooled({STATE_KEY: [p.state for p in parts], ACTION_KEY: [p.action for p in parts]}),
         target=None if any(t is None for t in targets) else np.concatenate(targets),
         target_world=None if any(w is None for w in scene_worlds) else np.concatenate(scene_worlds),
+        aim=None if any(t is None for t in targets) else np.concatenate([p.aim + off for p, off in zip(parts, aim_offsets)]),
         referent=None if any(r is None for r in referents) else np.concatenate(referents),
         source=np.concatenate([np.full(len(p), i, np.int64) for i, p in enumerate(parts)]),
         sources=[s for p in parts for s in p.sources],
@@ -242,18 +245,26 @@ def _load(root: Path) -> Frames:
     profile = profile_of(json.loads((root / INFO_PATH).read_text())["features"], root)
     images = {c: _frames(dataset, c, cache_dir() / "frames" / _key(root) / f"{c}.npy") for c in profile.camera_names}
     targets = _targets(root)
+    episode = data["episode_index"].to_numpy(np.int64)
+    starts, ends = episodes["dataset_from_index"].to_numpy(np.int64), episodes["dataset_to_index"].to_numpy(np.int64)
+    aim = None
+    if targets:
+        aim = episode.copy()
+        for ep, step, row in targets[3]:  # a switched episode's frames from its switch on aim at its second target
+            aim[starts[ep] + step : ends[ep]] = row
     return Frames(
         images=images,
         state=np.stack(data[STATE_KEY].to_numpy()).astype(np.float32),
         action=np.stack(data[ACTION_KEY].to_numpy()).astype(np.float32),
-        episode=data["episode_index"].to_numpy(np.int64),
+        episode=episode,
         task=data["task_index"].to_numpy(np.int64),
         tasks=list(tasks.index),
-        starts=episodes["dataset_from_index"].to_numpy(np.int64),
-        ends=episodes["dataset_to_index"].to_numpy(np.int64),
+        starts=starts,
+        ends=ends,
         stats=stats,
         target=targets[0] if targets else None,
         target_world=targets[1] if targets else None,
+        aim=aim,
         referent=targets[2] if targets else None,
         source=np.zeros(len(data), np.int64),
         sources=[str(root)],
@@ -272,19 +283,31 @@ def _frames(dataset: LeRobotReader, camera: str, cache: Path) -> np.ndarray:
     return np.load(cache, mmap_mode="r")
 
 
-def _targets(root: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Start position of each episode's target object, the world its scene is in and its referent
-    type (None for datasets without scene records)."""
+def _targets(root: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int, int]]] | None:
+    """Start position of each episode's target object, then of each switched episode's second
+    target, and the world each one's scene is in; each episode's referent type; and per switched
+    episode (episode, switch step, its second target's row). None for datasets without scene records."""
     path = root / SCENES_PATH
     if not path.is_file():
         return None
     records = parquet.read(path).sort_values("episode_index")
-    positions, scene_worlds = [], []
-    for scene, target in zip(records["scene"], records["target"]):
+    positions, scene_worlds, switched = [], [], []
+    switches = records["switch"] if "switch" in records else [None] * len(records)
+    seconds = []
+    for episode, scene, target, switch in zip(records["episode_index"], records["scene"], records["target"], switches):
         parsed = json.loads(scene)
         positions.append(next(o["pos"] for o in parsed["objects"] if o["id"] == target))
         scene_worlds.append(parsed.get("world", "native"))
-    return np.asarray(positions, np.float32), np.asarray(scene_worlds), records["referent"].to_numpy(str)
+        if isinstance(switch, str):
+            then = json.loads(switch)
+            seconds.append(
+                (int(episode), int(then["step"]), next(o["pos"] for o in parsed["objects"] if o["id"] == then["target"]))
+            )
+    for episode, step, position in seconds:
+        switched.append((episode, step, len(positions)))
+        positions.append(position)
+        scene_worlds.append(scene_worlds[episode])
+    return np.asarray(positions, np.float32), np.asarray(scene_worlds), records["referent"].to_numpy(str), switched
 
 
 def chunk_indices(frames: Frames, index: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:

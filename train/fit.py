@@ -137,9 +137,10 @@ def _shift(images: np.ndarray, pixels: int, rng: np.random.Generator) -> tuple[n
 
 
 def pixels(frames: data.Frames, mirrored: bool) -> np.ndarray:
-    """Where each episode's target starts in its agentview frames, (episodes, 2) as (column, row),
-    seen through the camera of the world its scene is in."""
-    out = np.empty((len(frames.starts), 2))
+    """Where each target starts in its agentview frames (a row per row of `frames.target`: each
+    episode's, then each switched episode's second), as (column, row), seen through the camera of
+    the world its scene is in."""
+    out = np.empty((len(frames.target), 2))
     for name in np.unique(frames.target_world):
         chosen = frames.target_world == name
         out[chosen] = worlds.world(str(name)).agentview.project(frames.target[chosen], frames.image_size, mirrored)
@@ -235,10 +236,10 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
         weight = torch.from_numpy(mask).float().unsqueeze(-1)
         loss = ((predicted.float() - goal).abs() * weight).sum() / (weight.sum() * goal.shape[-1])
         if target_pos is not None and cfg.aux_weight > 0:
-            where = model.locate_target(target_pos[torch.from_numpy(frames.episode[index])])
+            where = model.locate_target(target_pos[torch.from_numpy(frames.aim[index])])
             loss = loss + cfg.aux_weight * (located.float() - where).abs().mean()
         if pointing:
-            pixel = target_pixel[frames.episode[index]] + shifted[model.pointer_camera][1]
+            pixel = target_pixel[frames.aim[index]] + shifted[model.pointer_camera][1]
             per_frame = point_loss(pointer, torch.from_numpy(pixel).float(), frames.image_size)
             loss = loss + cfg.point_weight * (per_frame * torch.from_numpy(reaching[index]).float()).mean()
         for group, peak in zip(optimizer.param_groups, peaks):

@@ -1,18 +1,21 @@
 """A training set whose episodes change course (`switched=`, issue 52): lerobot's own loader gives
 each frame the instruction it was shown, the second instruction is achieved, and the set
-regenerates bit for bit from its specs (gen.verify)."""
+regenerates bit for bit from its specs (gen.verify), and training aims each frame at what its
+instruction names (train/data.py `aim`)."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+import numpy as np
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core.spec import EpisodeSpec
 from gen.products import scenes
 from gen.verify import verify
 from helpers import make_dataset
+from train import data
 
 
 def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> None:
@@ -33,3 +36,14 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
         assert EpisodeSpec.from_json(spec).after_switch().target == then["target"]
     assert seen == 2
     assert verify(root, 4) == [0, 1, 2, 3]  # each demo, re-run, changes course where it did and achieves the second ask
+    frames = data.load(root)
+    moved = frames.aim != frames.episode
+    for ep, switch, scene in zip(records.episode_index, records.switch, records.scene):
+        own = frames.episode == ep
+        if not isinstance(switch, str):
+            assert not moved[own].any()
+            continue
+        then = json.loads(switch)
+        assert np.flatnonzero(moved & own).tolist() == list(range(frames.starts[ep] + then["step"], frames.ends[ep]))
+        second = next(o["pos"] for o in json.loads(scene)["objects"] if o["id"] == then["target"])
+        np.testing.assert_allclose(frames.target[frames.aim[frames.ends[ep] - 1]], second, atol=1e-6)
