@@ -323,3 +323,27 @@ _WITH_SIGINT = (
 def interruptible(module: str, *args: str) -> list[str]:
     """The command line of `python -m module args` that Ctrl-C interrupts."""
     return [sys.executable, "-c", _WITH_SIGINT, module, *args]
+
+
+def lerobot_train(out: Path, dataset: Path, **policy: object) -> Path:
+    """`lerobot-train` offline on CPU for 2 steps; the pretrained_model folder it saves."""
+    args = {
+        "dataset.repo_id": f"local/{dataset.name}",
+        "dataset.root": dataset,
+        **{f"policy.{k}": v for k, v in policy.items()},
+        "policy.device": "cpu",
+        "policy.push_to_hub": "false",
+        "steps": 2,
+        "batch_size": 2,
+        "num_workers": 0,
+        "save_freq": 2,
+        "eval_freq": 0,
+        "wandb.enable": "false",
+        "output_dir": out,
+    }
+    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    train = [str(Path(sys.executable).parent / "lerobot-train"), *(f"--{k}={v}" for k, v in args.items())]
+    peft = ["--peft.method_type=LORA", "--peft.r=8", '--peft.target_modules=["linear1","linear2"]'] if "path" in policy else []
+    done = subprocess.run([*train, *peft], capture_output=True, text=True, env=env, cwd=out.parent)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out / "checkpoints" / "000002" / "pretrained_model"

@@ -20,7 +20,7 @@ from core.spec import EpisodeSpec
 from gen.config import GenConfig, parse
 from gen.planning.plan import designs, plan_and_audit
 from gen.products import scenes
-from helpers import make_dataset
+from helpers import lerobot_train, make_dataset
 from jobs.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -105,32 +105,8 @@ def test_verify_regenerates_each_type_from_its_spec(mixed: Path) -> None:
     assert done.returncode == 0 and f"episodes {list(range(every))} regenerate identically" in done.stdout, done.stderr[-2000:]
 
 
-def _lerobot_train(out: Path, dataset: Path, **policy: object) -> Path:
-    """`lerobot-train` offline on CPU for 2 steps; the pretrained_model folder it saves."""
-    args = {
-        "dataset.repo_id": "local/mixed",
-        "dataset.root": dataset,
-        **{f"policy.{k}": v for k, v in policy.items()},
-        "policy.device": "cpu",
-        "policy.push_to_hub": "false",
-        "steps": 2,
-        "batch_size": 2,
-        "num_workers": 0,
-        "save_freq": 2,
-        "eval_freq": 0,
-        "wandb.enable": "false",
-        "output_dir": out,
-    }
-    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
-    train = [str(Path(sys.executable).parent / "lerobot-train"), *(f"--{k}={v}" for k, v in args.items())]
-    peft = ["--peft.method_type=LORA", "--peft.r=8", '--peft.target_modules=["linear1","linear2"]'] if "path" in policy else []
-    done = subprocess.run([*train, *peft], capture_output=True, text=True, env=env, cwd=out.parent)
-    assert done.returncode == 0, done.stderr[-3000:]
-    return out / "checkpoints" / "000002" / "pretrained_model"
-
-
 def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path: Path) -> None:
-    act = _lerobot_train(
+    act = lerobot_train(
         tmp_path / "act",
         mixed,
         type="act",
@@ -141,7 +117,7 @@ def test_lerobot_train_fits_act_and_a_lora_of_it_on_a_mix(mixed: Path, tmp_path:
         n_action_steps=10,
     )
     assert (act / "model.safetensors").is_file()
-    lora = _lerobot_train(tmp_path / "lora", mixed, path=act)
+    lora = lerobot_train(tmp_path / "lora", mixed, path=act)
     assert (lora / "adapter_config.json").is_file() and json.loads((lora / "config.json").read_text())["use_peft"]
 
 

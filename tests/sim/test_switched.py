@@ -1,5 +1,6 @@
 """A training set whose episodes change course (`switched=`, issue 52): lerobot's own loader gives
-each frame the instruction it was shown, the second instruction is achieved, and the set
+each frame the instruction it was shown and its lerobot-train trains on them, the second
+instruction is achieved, and the set
 regenerates bit for bit from its specs (gen.verify), and training aims each frame at what its
 instruction names (train/data.py `aim`)."""
 
@@ -14,7 +15,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 from core.spec import EpisodeSpec
 from gen.products import scenes
 from gen.verify import verify
-from helpers import make_dataset
+from helpers import lerobot_train, make_dataset
 from train import data
 
 
@@ -36,6 +37,9 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
         assert EpisodeSpec.from_json(spec).after_switch().target == then["target"]
     assert seen == 2
     assert verify(root, 4) == [0, 1, 2, 3]  # each demo, re-run, changes course where it did and achieves the second ask
+    tiny = {"dim_model": 64, "dim_feedforward": 128, "chunk_size": 10, "n_action_steps": 10}
+    act = lerobot_train(tmp_path / "act", root, type="act", pretrained_backbone_weights="null", **tiny)
+    assert (act / "model.safetensors").is_file()  # upstream lerobot-train trains on frames of either instruction
     frames = data.load(root)
     moved = frames.aim != frames.episode
     for ep, switch, scene in zip(records.episode_index, records.switch, records.scene):
