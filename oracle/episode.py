@@ -66,10 +66,10 @@ def demonstrate(
     for action in prefix:
         scene.step(np.asarray(action))
     skills = Skills(scene, ik, spec)
-    if len(prefix):
-        skills.reseed = np.asarray(spec.setup.robot_home, float)
-        skills.rise()  # a changed course leaves from above the objects, not through them
     try:
+        if len(prefix):
+            skills.reseed = np.asarray(spec.setup.robot_home, float)
+            skills.rise()  # a changed course leaves from above the objects, not through them
         script(skills, spec)
     except IKError as exc:
         return Demo(
