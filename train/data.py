@@ -291,22 +291,19 @@ def _targets(root: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[tuple
     if not path.is_file():
         return None
     records = parquet.read(path).sort_values("episode_index")
-    positions, scene_worlds, switched = [], [], []
+    positions, scene_worlds, switched, seconds = [], [], [], []
     switches = records["switch"] if "switch" in records else [None] * len(records)
-    seconds = []
     for episode, scene, target, switch in zip(records["episode_index"], records["scene"], records["target"], switches):
         parsed = json.loads(scene)
-        positions.append(next(o["pos"] for o in parsed["objects"] if o["id"] == target))
+        start = {o["id"]: o["pos"] for o in parsed["objects"]}
+        positions.append(start[target])
         scene_worlds.append(parsed.get("world", "native"))
-        if isinstance(switch, str):
+        if isinstance(switch, str):  # its second target's row comes after every episode's first
             then = json.loads(switch)
-            seconds.append(
-                (int(episode), int(then["step"]), next(o["pos"] for o in parsed["objects"] if o["id"] == then["target"]))
-            )
-    for episode, step, position in seconds:
-        switched.append((episode, step, len(positions)))
-        positions.append(position)
-        scene_worlds.append(scene_worlds[episode])
+            switched.append((int(episode), int(then["step"]), len(records) + len(seconds)))
+            seconds.append(start[then["target"]])
+    positions += seconds
+    scene_worlds += [scene_worlds[episode] for episode, _, _ in switched]
     return np.asarray(positions, np.float32), np.asarray(scene_worlds), records["referent"].to_numpy(str), switched
 
 
