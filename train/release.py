@@ -33,7 +33,6 @@ from __future__ import annotations
 import json
 import shlex
 import sys
-from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,14 +40,15 @@ from core.exam import Exam, read
 from gen.config import GenConfig, parse
 from gen.planning import mix
 from jobs.cli import UserError, main
-from jobs.lock import held
 from referents import registry
 from train.stages import (
-    WEIGHTS_DIGEST,
+    Commands,
     Ledger,
+    begun_with,
     cell,
     commit,
     exam_report,
+    finished_report,
     generate_once,
     reference_report,
     train_once,
@@ -121,29 +121,9 @@ def _check(options: ReleaseOptions) -> None:
 
 
 def claim(options: ReleaseOptions, begin: bool) -> dict:
-    """The determining options `out` was begun with: recorded by the first invocation (`begin`), and
-    every later one must ask for the same (a folder this command did not begin is refused, never
-    written into, and its docs state what ran, not what a later invocation was given)."""
-    root, wanted = Path(options.out), {k: getattr(options, k) for k in DETERMINING}
-    record = root / RECORD
-    with held(root.parent / f".{root.name}.lock") if root.parent.is_dir() else nullcontext():
-        if record.is_file():
-            begun = json.loads(record.read_text())
-            changed = [k for k in DETERMINING if begun.get(k) != wanted[k]]
-            if changed:
-                k = changed[0]
-                raise UserError(f"out={root} was begun with {k}={value(begun.get(k))}, not {value(wanted[k])}; "
-                                "choose another out= for another recipe")  # fmt: skip
-            return begun
-        if root.exists() and any(root.iterdir()):
-            raise UserError(f"out={root} is not empty and holds no {RECORD}: not a release run's folder; choose another out=")
-        if not begin:
-            raise UserError(f"out={root} holds no release run yet; run python -m train.release first")
-        root.mkdir(parents=True, exist_ok=True)
-        tmp = record.with_suffix(".tmp")
-        tmp.write_text(json.dumps(wanted, indent=2))
-        tmp.replace(record)
-        return wanted
+    """The determining options `out` was begun with (train/stages.py `claim`)."""
+    wanted = {k: getattr(options, k) for k in DETERMINING}
+    return begun_with(Path(options.out), wanted, RECORD, "release", "python -m train.release", begin)
 
 
 def _gen(options: ReleaseOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
@@ -272,34 +252,6 @@ def _takes(
         exam_report(exam, weights, exam.trials, out, options.replan, ledger, stage, baseline and sim == "ours", sim)
 
 
-class Commands:
-    """The command line of every stage run so far, kept in `out` as each comes (a stopped run's
-    docs list them; two processes on one `out` add to the same file)."""
-
-    def __init__(self, root: Path) -> None:
-        self.path = root / "commands.json"
-
-    def read(self) -> list[str]:
-        return json.loads(self.path.read_text()) if self.path.is_file() else []
-
-    def append(self, line: str) -> None:
-        with held(self.path.with_name(f".{self.path.name}.lock")):
-            lines = self.read()
-            if line not in lines:
-                tmp = self.path.with_suffix(".tmp")
-                tmp.write_text(json.dumps([*lines, line], indent=2))
-                tmp.replace(self.path)
-
-
-def _finished(report_dir: Path, digest: str | None) -> dict | None:
-    """The report in `report_dir` if it was taken with the weights `digest` names (`weights_digest`;
-    None: a reference policy's, kept while its exam is)."""
-    path, stamp = report_dir / "report.json", report_dir / WEIGHTS_DIGEST
-    if not path.is_file() or not stamp.is_file() or (digest is not None and stamp.read_text() != digest):
-        return None
-    return json.loads(path.read_text())
-
-
 def collect(options: ReleaseOptions) -> dict:
     """Every finished result under `out`, whichever process took it: the rows the docs show (the
     options it was begun with, `claim`'s, are added by `release`)."""
@@ -321,7 +273,7 @@ def collect(options: ReleaseOptions) -> dict:
         digest = weights_digest(weights)
         for name in [*AXES, *(f"canonical-{w}" for w in CANONICAL)]:
             for sim in SIMS:
-                report = _finished(_report_dir(root, arm, name, sim), digest)
+                report = finished_report(_report_dir(root, arm, name, sim), digest)
                 if report is None:
                     continue
                 axis, exam = (name, "axis") if name in AXES else (name.removeprefix("canonical-"), "canonical")
@@ -331,7 +283,7 @@ def collect(options: ReleaseOptions) -> dict:
                     "simulator_versions": report.get("simulator_versions"),
                 })  # fmt: skip
     for axis in AXES:
-        report = _finished(root / "reports" / "named_place" / axis, None)
+        report = finished_report(root / "reports" / "named_place" / axis, None)
         if report is not None:
             rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "faces": report["faces"]})
     return {

@@ -18,7 +18,7 @@ import json
 import shutil
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -67,6 +67,51 @@ class Ledger:
             tmp = self.path.with_suffix(".tmp")
             tmp.write_text(json.dumps(self.spent, indent=2))
             tmp.replace(self.path)
+
+
+class Commands:
+    """The command line of every stage run so far, kept in `out` as each comes (a stopped run's
+    docs list them; two processes on one `out` add to the same file)."""
+
+    def __init__(self, root: Path) -> None:
+        self.path = root / "commands.json"
+
+    def read(self) -> list[str]:
+        return json.loads(self.path.read_text()) if self.path.is_file() else []
+
+    def append(self, line: str) -> None:
+        with held(self.path.with_name(f".{self.path.name}.lock")):
+            lines = self.read()
+            if line not in lines:
+                tmp = self.path.with_suffix(".tmp")
+                tmp.write_text(json.dumps([*lines, line], indent=2))
+                tmp.replace(self.path)
+
+
+def begun_with(root: Path, wanted: dict, record: str, what: str, command: str, begin: bool) -> dict:
+    """The determining options the `what` run in `root` was begun with: recorded in `record` by the
+    first invocation (`begin`), and every later one must ask for the same (a folder `command` did
+    not begin is refused, never written into, and its docs state what ran, not what a later
+    invocation was given)."""
+    path = root / record
+    with held(root.parent / f".{root.name}.lock") if root.parent.is_dir() else nullcontext():
+        if path.is_file():
+            begun = json.loads(path.read_text())
+            changed = [k for k in wanted if begun.get(k) != wanted[k]]
+            if changed:
+                k = changed[0]
+                raise UserError(f"out={root} was begun with {k}={value(begun.get(k))}, not {value(wanted[k])}; "
+                                "choose another out= for another recipe")  # fmt: skip
+            return begun
+        if root.exists() and any(root.iterdir()):
+            raise UserError(f"out={root} is not empty and holds no {record}: not a {what} run's folder; choose another out=")
+        if not begin:
+            raise UserError(f"out={root} holds no {what} run yet; run {command} first")
+        root.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(wanted, indent=2))
+        tmp.replace(path)
+        return wanted
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
@@ -171,6 +216,15 @@ def weights_digest(weights: Path) -> str:
     from train.policy import MODEL_FILE
 
     return hashlib.sha256((weights / MODEL_FILE if weights.is_dir() else weights).read_bytes()).hexdigest()
+
+
+def finished_report(report_dir: Path, digest: str | None) -> dict | None:
+    """The report in `report_dir` if it was taken with the weights `digest` names (`weights_digest`;
+    None: a reference policy's, kept while its exam is)."""
+    path, stamp = report_dir / "report.json", report_dir / WEIGHTS_DIGEST
+    if not path.is_file() or not stamp.is_file() or (digest is not None and stamp.read_text() != digest):
+        return None
+    return json.loads(path.read_text())
 
 
 def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: str) -> dict:

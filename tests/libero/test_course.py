@@ -1,0 +1,73 @@
+"""The course command (`python -m train.course`) end to end at its smallest: a switched LIBERO-Object
+set, the held-out exam with its switch row, a LoRA, its take with the shortcut beside it, and the
+tables written between RESULTS_FACES.md's markers; a second run reuses every stage. The full-size
+run is the command docs/RESULTS_FACES.md lists."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from core import parquet
+from core.products import SCENES_PATH
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+SMALL = ("shares=[0.5]", "n=2", "steps=2", "decay=1", "trials=1", "image_size=32", "workers=1", "threads=1")
+SMALL += ("sims=[ours]", "exams=[exam]", "without=")
+
+
+def _course(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "train.course", *SMALL, *args], capture_output=True, text=True)
+
+
+def test_a_switched_share_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
+    out, docs = tmp_path / "course", tmp_path / "docs"
+    docs.mkdir()
+    page = (DOCS / "RESULTS_FACES.md").read_text()
+    (docs / "RESULTS_FACES.md").write_text(page)
+    done = _course(f"out={out}", f"docs={docs}")
+    assert done.returncode == 0, done.stderr[-3000:]
+    scenes = parquet.read(out / "data" / "switched-50" / SCENES_PATH)
+    assert scenes["switch"].notna().sum() == 1  # round(0.5 x 2)
+    results = json.loads((docs / "results_course.json").read_text())
+    [row] = results["rows"]
+    assert (row["policy"], row["share"], row["exam"], row["sim"]) == ("switched-50", 0.5, "exam", "ours")
+    assert row["faces"]["switch_obeyed"]["n"] == 1 and row["position"]["obeyed_name"]["n"] == row["faces"]["obeyed_name"]["n"]
+    text = (docs / "RESULTS_FACES.md").read_text()
+    before, after = page.split("<!-- course:")
+    assert text.startswith(before) and text.endswith(after.split("<!-- /course -->")[1])
+    assert "| switched-50 |" in text and "| position |" in text
+    assert (docs / "checkpoints" / "libero_object-switch-lora" / "model.pt").is_file()
+    spent = json.loads((out / "timings.json").read_text())
+    again = _course(f"out={out}", f"docs={docs}")
+    assert again.returncode == 0 and json.loads((out / "timings.json").read_text()) == spent  # nothing redone
+    assert (docs / "RESULTS_FACES.md").read_text() == text
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "RESULTS_FACES.md").write_text("# mine\n")  # no markers: no place for the tables
+    refused = _course("train=false", f"out={out}", f"docs={mine}")
+    assert refused.returncode == 2 and "markers" in refused.stderr and [p.name for p in mine.iterdir()] == ["RESULTS_FACES.md"]
+    assert (mine / "RESULTS_FACES.md").read_text() == "# mine\n"
+    other = _course("lr_floor=0.5", "train=false", f"out={out}", f"docs={docs}")
+    assert other.returncode == 2 and "begun with lr_floor=0.05, not 0.5" in other.stderr, other.stderr
+
+
+@pytest.mark.parametrize(
+    ("arg", "needle"),
+    [("shares=[1.5]", "shares must be"), ("docs=/nowhere", "markers"), ("sims=[gazebo]", "sims must be"),
+     ("exams=[final]", "exams must be"),
+     ("without=nowhere", "holds no checkpoint")],
+)  # fmt: skip
+def test_bad_options_are_refused_in_one_line(arg: str, needle: str, tmp_path: Path) -> None:
+    docs = tmp_path / "d"
+    docs.mkdir()
+    (docs / "RESULTS_FACES.md").write_text((DOCS / "RESULTS_FACES.md").read_text())
+    argv = [arg, f"out={tmp_path / 'r'}", *([] if arg.startswith("docs=") else [f"docs={docs}"])]
+    done = subprocess.run([sys.executable, "-m", "train.course", *argv], capture_output=True, text=True)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
+    assert not (tmp_path / "r").exists() and [p.name for p in docs.iterdir()] == ["RESULTS_FACES.md"]
