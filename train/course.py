@@ -171,17 +171,17 @@ def _takes(options: CourseOptions, policy: str, ckpt: Path, exams: dict, sim: st
 
 
 def run(options: CourseOptions) -> None:
-    """Every stage, in the order that gives results soonest: the exams and the checkpoint trained
-    without (taken in our rebuild, then LIBERO's), then per share its data, training and takes."""
+    """Every stage, in the order that gives the new results soonest: the exams, then per share its
+    data, training and takes (our rebuild, then LIBERO's), then the checkpoint trained without's."""
     root = Path(options.out)
     ledger, commands = Ledger(root), Commands(root)
     exams = _exams(options, ledger, commands)
-    for sim in options.sims if options.without else ():
-        _takes(options, WITHOUT, Path(options.without), exams, sim, ledger, commands)
     for share in options.shares:
         ckpt = _train(options, share, ledger, commands)
         for sim in options.sims:
             _takes(options, name(share), ckpt, exams, sim, ledger, commands)
+    for sim in options.sims if options.without else ():
+        _takes(options, WITHOUT, Path(options.without), exams, sim, ledger, commands)
 
 
 def collect(options: CourseOptions, begun: dict) -> dict:
