@@ -56,6 +56,12 @@ def yaw_matrix(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def matrix_yaw(rotation: np.ndarray) -> float:
+    """The `yaw` of a rotation `yaw_matrix(yaw)` (the inverse of `yaw_matrix`, for rotations about
+    the world's z)."""
+    return float(np.arctan2(rotation[1, 0], rotation[0, 0]))
+
+
 def turned(axis: np.ndarray, angle: float) -> np.ndarray:
     """The turn by `angle` about the unit vector `axis` (Rodrigues): a sloping shelf's tilt, a held
     bottle turned down along it."""

@@ -48,13 +48,14 @@ def demonstrate(
     state: np.ndarray | None = None,
     settle: int = 0,
     prefix: Sequence[np.ndarray] = (),
+    carrying: str | None = None,
 ) -> Demo:
     """Run `script` from the spec's poses, or from the physics `state` (an exam trial's start),
     after `settle` steps that hold the arm still (a profile's settle steps) and the actions of
     `prefix` (what ran before a plan changed course: the demo holds the actions after them, which
-    first raise the hand over the objects, and its IK may start from the arm's home pose where the
-    arm's own pose leads nowhere). A spec that switches (`EpisodeSpec.switch`) changes course on
-    the way (`change_course`)."""
+    first raise the hand over the objects, or go on with what the prefix left `carrying` in the
+    hand, and its IK may start from the arm's home pose where the arm's own pose leads nowhere). A
+    spec that switches (`EpisodeSpec.switch`) changes course on the way (`change_course`)."""
     if spec.switch is not None and not len(prefix):
         return change_course(scene, ik, spec, script, state, settle)
     scene.reset(spec)
@@ -69,7 +70,10 @@ def demonstrate(
     try:
         if len(prefix):
             skills.reseed = np.asarray(spec.setup.robot_home, float)
-            skills.rise()  # a changed course leaves from above the objects, not through them
+            if carrying is not None:
+                skills.carry_on(carrying)
+            else:
+                skills.rise()  # a changed course leaves from above the objects, not through them
         script(skills, spec)
     except IKError as exc:
         return Demo(
@@ -98,32 +102,65 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
 
 
 MOVED = 0.01  # m: how far the thing a program acts on must move before the hand counts as holding it
+CARRIED = 0.05  # m: how high a carried object has risen when a switch that only changes where it goes comes
 
 
 def change_course(
     scene: Scene, ik: ArmIK, spec: EpisodeSpec, script: DemoScript, state: np.ndarray | None = None, settle: int = 0
 ) -> Demo:
-    """A switched spec's demonstration: the first instruction's up to where the hand first comes
-    within the exam's SWITCH_DISTANCE of what it takes hold of (`approach_step`: the approach has
-    committed and nothing is held yet, where an exam's switch rows change the instruction too),
-    then the oracle's replanned course to the second instruction's ask, by which it is judged."""
+    """A switched spec's demonstration: the first instruction's up to where its course and the
+    second's part, then the oracle's replanned course to the second instruction's ask, by which it
+    is judged. Where they part: when the second ask brings the object the first carries somewhere
+    else (LIBERO-Goal's "… on the stove" for "… on the plate"), once it is carried CARRIED high
+    (`carry_step`): before the grasp such a switch changes nothing the hand does, after it the hand
+    carries it on to the new place. Otherwise, or where the oracle cannot carry it on (a bottle
+    held across, asked onto a sloping rack), where the hand first comes within the exam's
+    SWITCH_DISTANCE of what it takes hold of (`approach_step`, where an exam's switch rows change
+    it). An object taken is never put back: a switch to another object comes before the grasp."""
     first = demonstrate(scene, ik, replace(spec, switch=None), script, state, settle)
     if not first.success:
         return replace(first, spec=spec, failure=f"before its switch: {first.failure}")
+    then = spec.after_switch()
+    held = programs.named(spec.task.program).moved(spec, spec.target)
+    asked = programs.named(then.task.program)
+    if asked.brings and asked.moved(then, then.target) == held:
+        carried = carry_step(scene, first, held, CARRIED)
+        if carried is not None:
+            demo = _joined(first, carried, demonstrate(scene, ik, then, script, state, settle, first.actions[:carried], held))
+            if demo.success:
+                return replace(demo, spec=spec)
     step = approach_step(scene, first, SWITCH_DISTANCE)
     if not step:
         why = "the hand starts there" if step == 0 else "what it acts on never moves"
         return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
-    then = demonstrate(scene, ik, spec.after_switch(), script, state, settle, first.actions[:step])
+    demo = _joined(first, step, demonstrate(scene, ik, then, script, state, settle, first.actions[:step]))
+    return replace(demo, spec=spec)
+
+
+def _joined(first: Demo, step: int, then: Demo) -> Demo:
+    """`first`'s actions before `step`, then `then`'s: judged as `then` is."""
     return Demo(
-        spec,
+        then.spec,
         np.concatenate([first.actions[:step], then.actions]),
-        np.concatenate([first.states[:step], then.states]),
+        np.concatenate([first.states[:step], then.states.reshape(-1, first.states.shape[1])]),  # none if its rise failed
         then.outcome,
         then.success,
         then.failure and f"switched at step {step}: {then.failure}",
         step,
     )
+
+
+def carry_step(scene: Scene, demo: Demo, held: str, height: float) -> int | None:
+    """The first action of `demo` at whose start `held` has risen `height` above where it stood;
+    None if it never does."""
+    start = None
+    for t, state in enumerate(demo.states):
+        scene.set_physics_state(state)
+        z = float(scene.object_pos(held)[2])
+        start = z if start is None else start
+        if z - start > height:
+            return t
+    return None
 
 
 def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from core import contact
-from core.rotations import yaw_matrix
+from core.rotations import matrix_yaw, yaw_matrix
 from core.success import PUSH_DIRECTION
 from oracle.clearance import CARRY_MARGIN, FINGER_TIP
 from oracle.furniture import FurnitureSkills
-from oracle.ik import IKError, grasp_yaw
+from oracle.ik import DOWN, IKError, grasp_yaw
 from oracle.motion import CLOSED
 
 RETREAT = 0.1  # how far the hand rises from where it let go
@@ -42,9 +42,19 @@ class Skills(FurnitureSkills):
         if ee[2] < self.clearance():
             self.move_linear([ee[0], ee[1], self.clearance()])
 
+    def carry_on(self, object_id: str) -> None:
+        """Take up a plan with `object_id` in the closed hand, turned as the plan before left it (a
+        course changed while carrying it: the new plan's grasp of it is already done)."""
+        kind = self._kind(object_id)
+        self.held, self.gentle, self.gripper = (object_id, contact.grip_height(kind)), kind.neck, CLOSED
+        self.yaw = matrix_yaw(self.scene.ee_rot() @ DOWN.T)
+
     def grasp(self, object_id: str, approach: float = 0.07, onto: str | None = None) -> None:
         """Come down on the object from above, fingers across its narrow axis, and close; to be laid
-        `onto` a sloping shelf, fingers across the slope (the hand then turns it down along it)."""
+        `onto` a sloping shelf, fingers across the slope (the hand then turns it down along it).
+        Nothing when the hand already holds it (`carry_on`)."""
+        if self.held is not None and self.held[0] == object_id:
+            return
         kind = self._kind(object_id)
         pos = self.scene.object_pos(object_id)  # where it stood before the hand came near
         top = contact.top(kind, pos)

@@ -36,14 +36,16 @@ class DatasetSummary:
     failed_attempts: int
     seconds: float
     verdict: str
+    switched: int | None = None  # episodes that change course, of a set asked for some (`switched=`)
 
     def __str__(self) -> str:
         attempts = self.episodes + self.failed_attempts
+        changed = "" if self.switched is None else f"{self.switched} of {self.episodes} episodes change course\n"
         return (
             f"wrote {self.episodes} episodes ({self.frames} frames) to {self.out}\n"
             f"oracle: {self.failed_attempts} failed demos resampled; success before retries "
             f"{self.episodes}/{attempts} = {self.episodes / attempts:.1%}\n"
-            f"confound audit: {self.verdict}\n"
+            f"{changed}confound audit: {self.verdict}\n"
             f"wall time {self.seconds:.1f} s, {self.frames / self.seconds:.1f} frames/s, "
             f"{self.seconds / self.episodes:.2f} s/episode"
         )
@@ -100,9 +102,11 @@ def write_audit(root: Path, records: list[tuple[Referent, dict]]) -> None:
     (root / AUDIT_PATH).write_text(json.dumps(content, indent=2))
 
 
-def write_generation(root: Path, provenance: Provenance, episodes: int, failed_attempts: int, seconds: float) -> None:
+def write_generation(
+    root: Path, provenance: Provenance, episodes: int, failed_attempts: int, seconds: float, switched: int | None = None
+) -> None:
     """Written last: its presence marks the product complete."""
-    record = provenance.generation(episodes, failed_attempts, seconds)
+    record = provenance.generation(episodes, failed_attempts, seconds, switched)
     (root / GENERATION_PATH).write_text(json.dumps(record, indent=2, default=str))
 
 
@@ -118,11 +122,12 @@ def build(cfg: GenConfig, planned: Planned, provenance: Provenance, out: Path, s
         write_audit(root, records)
         contact_sheet(root, root / PREVIEW_PATH)
         seconds = time.perf_counter() - started
-        summary = DatasetSummary(out, len(rows), frames, failed, seconds, verdict(audited))
+        switched = sum(spec.switch is not None for spec in written) if cfg.switched else None
+        summary = DatasetSummary(out, len(rows), frames, failed, seconds, verdict(audited), switched)
         contents = card.dataset_contents(summary.episodes, summary.frames, failed, cfg.fps, planned.recording.interface)
         card.write(root, audited, provenance, contents)
         faults.point("finalize")
-        write_generation(root, provenance, summary.episodes, failed, seconds)
+        write_generation(root, provenance, summary.episodes, failed, seconds, switched)
         partial.publish()
     return summary
 

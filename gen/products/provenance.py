@@ -143,9 +143,11 @@ class Provenance:
             del config["switched"]
         return config
 
-    def generation(self, episodes: int, failed_attempts: int, seconds: float) -> dict:
-        """`meta/generation.json`: what regenerates the product, and that it is complete."""
+    def generation(self, episodes: int, failed_attempts: int, seconds: float, switched: int | None = None) -> dict:
+        """`meta/generation.json`: what regenerates the product, and that it is complete (and, of a
+        set asked for switched episodes, how many change course: `switched_episodes`)."""
         v = self.versions
+        changed = {} if switched is None else {"switched_episodes": switched}
         return {
             "generator": "deconfound",
             **v,
@@ -157,5 +159,6 @@ class Provenance:
             "referent_spec_hash": self.spec_hash,
             "episodes": episodes,
             "failed_attempts": failed_attempts,
+            **changed,
             "seconds": round(seconds, 2),
         }
