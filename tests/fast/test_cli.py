@@ -150,11 +150,13 @@ ENTRY_POINTS = [
     ("train", False),
     ("train.experiment", False),
     ("train.axes", False),
+    ("train.course", False),
     ("bench/generate.py", False),
     ("bench/compare.py", False),
     ("bench/battery.py", False),
     ("bench/first_try.py", False),
     ("scripts/first_frames.py", True),
+    ("scripts/switch_picture.py", False),
 ]
 
 

@@ -200,3 +200,26 @@ def test_an_exam_made_before_the_maps_says_its_predictions_went_unscored(exam: P
     pd.read_parquet(exam / "answers.parquet").drop(columns=[FRAME_OBJECTS]).to_parquet(old / "answers.parquet")
     report = take(read(old), read(old).trials.head(3), make("oracle"), tmp_path / "take", baseline=False)[0]
     assert "make the exam again" in report["prediction"]["unscored"] and report["faces"]["task"]["k"] == 1
+
+
+def test_the_switch_picture_shows_each_policy_on_the_same_switch_row(exam: Path, tmp_path: Path) -> None:
+    """scripts/switch_picture.py (Figure 9's illustration): a row of frames per policy, the same switch
+    row for both, each judged beside its row; a row that is not a switch row is one line."""
+    import subprocess
+    import sys
+
+    import numpy as np
+    from PIL import Image
+
+    script = Path(__file__).resolve().parents[2] / "scripts" / "switch_picture.py"
+    out = tmp_path / "switch.png"
+    args = [sys.executable, str(script), f"exam={exam}", "policies=[oracle,position]", f"out={out}"]
+    done = subprocess.run(args, capture_output=True, text=True)
+    assert done.returncode == 0 and out.is_file(), done.stderr[-2000:]
+    picture = np.asarray(Image.open(out).convert("L"), float)
+    top, bottom = picture[: len(picture) // 2], picture[len(picture) // 2 :]
+    assert top.std() > 10 and bottom.std() > 10 and not np.array_equal(top, bottom)
+    task = read(exam).trials.query("face == 'task'")["row"].iloc[0]
+    refused = subprocess.run([*args[:-1], f"row={task}", f"out={tmp_path / 'no.png'}"], capture_output=True, text=True)
+    lines = refused.stderr.strip().splitlines()
+    assert refused.returncode == 2 and len(lines) == 1 and "not a switch row" in lines[0] and not (tmp_path / "no.png").exists()
