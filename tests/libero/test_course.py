@@ -42,6 +42,7 @@ def test_a_switched_share_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     assert text.startswith(before) and text.endswith(after.split("<!-- /course -->")[1])
     assert "| switched-50 |" in text and "| position |" in text
     assert (docs / "checkpoints" / "libero_object-switch-lora" / "model.pt").is_file()
+    _reads_the_instruction_it_is_shown(out / "ckpt" / "switched-50")
     spent = json.loads((out / "timings.json").read_text())
     again = _course(f"out={out}", f"docs={docs}")
     assert again.returncode == 0 and json.loads((out / "timings.json").read_text()) == spent  # nothing redone
@@ -71,3 +72,21 @@ def test_bad_options_are_refused_in_one_line(arg: str, needle: str, tmp_path: Pa
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
     assert not (tmp_path / "r").exists() and [p.name for p in docs.iterdir()] == ["RESULTS_FACES.md"]
+
+
+def _reads_the_instruction_it_is_shown(ckpt: Path) -> None:
+    """The tiny policy embeds the instruction of the observation each chunk is predicted from, so a
+    switch reaches it at its next chunk (`replan` actions), not only at the row's start."""
+    import numpy as np
+
+    from core.profiles import STATE_KEY, TASK_KEY
+    from train.policy import CheckpointPolicy
+
+    policy = CheckpointPolicy(str(ckpt), replan=2)
+    config = policy.model.config
+    frames = {config.features.image_key(c): np.zeros((config.image_size,) * 2 + (3,), np.uint8) for c in policy.model.cameras}
+    shown = []
+    for said in ("pick up the ketchup and place it in the basket",) * 2 + ("pick up the milk and place it in the basket",) * 2:
+        policy.act({**frames, STATE_KEY: np.zeros(policy.model.state_mean.shape, np.float32), TASK_KEY: said})
+        shown.append(list(policy._embeddings))
+    assert shown[1] == shown[0] == ["pick up the ketchup and place it in the basket"] and len(shown[2]) == 2
