@@ -113,6 +113,8 @@ def name(share: float) -> str:
 
 def _exams(options: CourseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """Both exams, made once."""
+    import torch._dynamo  # noqa: F401  before the canonical exam's GL context (train/stages.py generate_once: why)
+
     from gen.products.canonical import CanonicalOptions, build
 
     root = Path(options.out)
