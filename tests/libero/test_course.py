@@ -58,19 +58,21 @@ def test_a_switched_share_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("arg", "needle"),
-    [("shares=[1.5]", "shares must be"), ("docs=/nowhere", "markers"), ("sims=[gazebo]", "sims must be"),
-     ("exams=[final]", "exams must be"),
-     ("without=nowhere", "holds no checkpoint")],
+    ("option", "needle"),
+    [({"shares": [1.5]}, "shares must be"), ({"docs": "/nowhere"}, "markers"), ({"sims": ["gazebo"]}, "sims must be"),
+     ({"exams": ["final"]}, "exams must be"), ({"without": "nowhere"}, "holds no checkpoint")],
 )  # fmt: skip
-def test_bad_options_are_refused_in_one_line(arg: str, needle: str, tmp_path: Path) -> None:
+def test_bad_options_are_refused_before_anything_is_made(option: dict, needle: str, tmp_path: Path) -> None:
+    """Each is one line (a UserError: the command line prints it, exit 2) before any folder is made."""
+    from jobs.cli import UserError
+    from train.course import CourseOptions, course
+
     docs = tmp_path / "d"
     docs.mkdir()
     (docs / "RESULTS_FACES.md").write_text((DOCS / "RESULTS_FACES.md").read_text())
-    argv = [arg, f"out={tmp_path / 'r'}", *([] if arg.startswith("docs=") else [f"docs={docs}"])]
-    done = subprocess.run([sys.executable, "-m", "train.course", *argv], capture_output=True, text=True)
-    lines = done.stderr.strip().splitlines()
-    assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
+    chosen = CourseOptions(**({"out": str(tmp_path / "r"), "docs": str(docs)} | option))
+    with pytest.raises(UserError, match=needle):
+        course(chosen)
     assert not (tmp_path / "r").exists() and [p.name for p in docs.iterdir()] == ["RESULTS_FACES.md"]
 
 
