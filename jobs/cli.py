@@ -9,7 +9,9 @@ as a dataclass (a trailing `# comment` on a field is its help) and hands it with
 * bad input — an unknown or malformed option, a wrong type, a missing required value, an empty
   `out=`, anything the command raises as `UserError` — prints one line `error: ...` and exits 2,
   before any work;
-* a run that fails (`Failed`) prints one line and exits 1; Ctrl-C exits 130.
+* a run that fails (`Failed`) prints one line and exits 1; Ctrl-C exits 130, and a SIGTERM (a
+  job scheduler's, a session's end) stops it the same way, its `finally` blocks run (the stage
+  wall times an experiment keeps, a partial run's files), exit 143.
 
 Parsing is Hydra's override grammar (`key=value`, `a.b=value`, `'list=[x,y]'`), so values are
 typed and checked by OmegaConf. A command may take one positional argument (e.g. the dataset
@@ -21,7 +23,9 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import re
+import signal
 import sys
+import threading
 import typing
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -193,6 +197,8 @@ def main(
     if any(a in HELP_FLAGS for a in argv):
         print(usage(command, schema, doc, positional))
         return 0
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminated) if main_thread else None
     try:
         return int(run(parse(command, schema, argv, positional)) or 0)
     except UserError as exc:
@@ -203,4 +209,15 @@ def main(
         return 1
     except KeyboardInterrupt as exc:
         print(f"error: {str(exc) or 'interrupted'}", file=sys.stderr)  # a bare Ctrl-C has no message
-        return 130
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """A SIGTERM, stopping the run as Ctrl-C does."""
+
+
+def _terminated(signum: int, frame: object) -> None:
+    raise Terminated("terminated (SIGTERM)")

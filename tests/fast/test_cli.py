@@ -330,3 +330,27 @@ def test_help_names_every_registered_policy(command: str) -> None:
     policy = next(line for line in shown.splitlines() if line.strip().startswith("policy="))
     missing = [name for name in names() if name not in policy]
     assert not missing, (missing, policy)
+
+
+def test_a_sigterm_stops_a_run_as_ctrl_c_does(tmp_path: Path) -> None:
+    """A scheduler's or a session's SIGTERM: the run's `finally` blocks run (an experiment's stage wall
+    times, a partial run's files), one line, exit 143."""
+    import signal
+    import time
+
+    done = tmp_path / "finally"
+    script = (
+        "import dataclasses, sys, time\n"
+        "from jobs.cli import main\n"
+        "@dataclasses.dataclass\nclass O:\n    x: int = 0\n"
+        "def run(o):\n    print('running', flush=True)\n    try:\n        time.sleep(60)\n"
+        f"    finally:\n        open({str(done)!r}, 'w').write('ran')\n"
+        "sys.exit(main('t', O, run))\n"
+    )
+    running = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert running.stdout.readline().strip() == "running"
+    time.sleep(0.2)
+    running.send_signal(signal.SIGTERM)
+    _, err = running.communicate(timeout=30)
+    assert running.returncode == 143 and err.strip().splitlines() == ["error: terminated (SIGTERM)"], err
+    assert done.read_text() == "ran"
