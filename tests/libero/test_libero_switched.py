@@ -1,7 +1,8 @@
-"""A LIBERO-Object training set whose episodes change course (`switched=`, issue 52) replays in
-LIBERO's own environment: each episode rebuilt from its record, its recorded actions stepped
-there, and LIBERO's own check_success() judging the second instruction's goal where the
-instruction changed (tests/helpers.py liberos_replay)."""
+"""Training sets whose episodes change course (`switched=`) replay in LIBERO's own environment:
+each episode rebuilt from its record, its recorded actions stepped there, and LIBERO's own
+check_success() judging the second instruction's goal where the instruction changed
+(tests/helpers.py liberos_replay). LIBERO-Object's switches turn to another grocery before the
+grasp; LIBERO-Goal's also carry a held object on to another place."""
 
 from __future__ import annotations
 
@@ -17,10 +18,12 @@ from helpers import liberos_own, liberos_replay, make_dataset
 
 
 @pytest.mark.reference
-def test_switched_episodes_succeed_in_liberos_own_environment(tmp_path: Path) -> None:
-    root = make_dataset(tmp_path / "switched", "referent=libero_object", "n=4", "switched=0.5", "image_size=32", "workers=1")
+@pytest.mark.parametrize(("world", "n", "seed"), [("libero_object", 4, 0), ("libero_goal", 8, 7)])
+def test_switched_episodes_succeed_in_liberos_own_environment(world: str, n: int, seed: int, tmp_path: Path) -> None:
+    args = (f"referent={world}", f"n={n}", f"seed={seed}", "switched=0.5", "image_size=32", "workers=1")
+    root = make_dataset(tmp_path / "switched", *args)
     switched = [json.loads(s) for s in scenes.read(root).sort_values("episode_index")["switch"] if isinstance(s, str)]
-    assert len(switched) == 2
-    request = liberos_replay(root, worlds.world("libero_object"))
+    assert len(switched) == n // 2
+    request = liberos_replay(root, worlds.world(world))
     results = json.loads(liberos_own("replay", request, tmp_path / "replay.json").read_text())
-    assert [r["success"] for r in results] == [True] * 4, results
+    assert [r["success"] for r in results] == [True] * n, results
