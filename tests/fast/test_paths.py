@@ -12,8 +12,9 @@ ROOT = Path(__file__).resolve().parents[2]
 NOT_OURS = {
     "bench/libero": "a LeRobot repo id bench/compare.py gives its throwaway dataset",
     "bench/naive": "a LeRobot repo id bench/compare.py gives its throwaway dataset",
-    "docs/checkpoints/libero-release-lora": "written by python -m train.release",
-    "docs/checkpoints/libero-release-confounded-lora": "written by python -m train.release",
+    "docs/checkpoints/libero_object-switch-lora": "written by python -m train.course",
+    "docs/results_course.json": "written by python -m train.course",
+    "docs/switch_course.png": "drawn by scripts/switch_picture.py once train.course has its checkpoint",
     "docs/libero_axes.png": "written by python -m train.release",
     "scripts/compute_norm_stats.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",
     "scripts/train.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",

@@ -130,6 +130,7 @@ WITH_OUT = (
     "train.experiment:ExperimentOptions",
     "train.axes:AxesOptions",
     "train.release:ReleaseOptions",
+    "train.course:CourseOptions",
 )
 
 
