@@ -15,7 +15,6 @@ NOT_OURS = {
     "docs/checkpoints/libero_object-switch-lora": "written by python -m train.course",
     "docs/results_course.json": "written by python -m train.course",
     "docs/switch_course.png": "drawn by scripts/switch_picture.py once train.course has its checkpoint",
-    "docs/libero_axes.png": "written by python -m train.release",
     "scripts/compute_norm_stats.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",
     "scripts/train.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",
     "scripts/serve_policy.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",
