@@ -30,17 +30,16 @@ small enough, to docs/checkpoints/.
 from __future__ import annotations
 
 import json
-import shlex
 import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from core.exam import read
 from eval.policies import FeatureMismatch
-from gen.config import GenConfig, parse
+from gen.config import GenConfig
 from jobs.cli import UserError, main
 from referents import registry
-from train.stages import Ledger, cell, commit, exam_report, generate_once, train_once, value
+from train.stages import Ledger, cell, commit, exam_report, gen_command, generate_once, train_once, value
 
 PARTS = ("axes", "loo", "tiers")
 AXES = ("object", "color", "category", "ordinal", "relation", "negation", "composition")
@@ -94,13 +93,6 @@ def _check(options: AxesOptions) -> None:
         raise UserError(f"trained, distractor_only and absent must be three different objects, got {tiers}")
 
 
-def _gen(options: AxesOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
-    """A `python -m gen` command line and its validated config (resume=true: a generation killed
-    with the experiment continues; a finished one is skipped before it is asked)."""
-    line = [*args, f"image_size={options.image_size}", f"out={out}"]
-    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true", "resume=true"])
-
-
 def _stages(options: AxesOptions) -> dict[str, tuple[str, GenConfig]]:
     """Stage name -> (command, config) of every dataset and exam the chosen parts need."""
     root, stages = Path(options.out), {}
@@ -111,28 +103,19 @@ def _stages(options: AxesOptions) -> dict[str, tuple[str, GenConfig]]:
         exams.add(options.left_out)
     for axis in options.axes:
         if axis in data:
-            stages[f"data {axis}"] = _gen(
-                options, root / "data" / axis, f"referent={axis}", f"n={options.n}", f"seed={options.seed}"
-            )
+            args = (f"referent={axis}", f"n={options.n}", f"seed={options.seed}")
+            stages[f"data {axis}"] = gen_command(args, root / "data" / axis, options.image_size)
         if axis in exams:
-            stages[f"exam {axis}"] = _gen(
-                options,
-                root / "exams" / axis,
-                f"referent={axis}",
-                f"n={options.trials}",
-                "split=exam",
-                f"seed={options.seed + 1}",
-            )
+            args = (f"referent={axis}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}")
+            stages[f"exam {axis}"] = gen_command(args, root / "exams" / axis, options.image_size)
     if "tiers" in options.parts:
         quoted = (f'"{options.absent}"', f'"{options.distractor_only}"', f'"{options.trained}"')
-        stages["data tiers"] = _gen(
-            options, root / "data" / "tiers", "referent=object", f"n={options.n}", f"seed={options.seed}",
-            f"holdout=[{quoted[0]}]", f"distractor_only=[{quoted[1]}]",
-        )  # fmt: skip
-        stages["exam tiers"] = _gen(
-            options, root / "exams" / "tiers", "referent=object", f"n={options.tier_trials}", "split=exam",
-            f"seed={options.seed + 1}", f"targets=[{','.join(quoted)}]",
-        )  # fmt: skip
+        args = ("referent=object", f"n={options.n}", f"seed={options.seed}", f"holdout=[{quoted[0]}]",
+                f"distractor_only=[{quoted[1]}]")  # fmt: skip
+        stages["data tiers"] = gen_command(args, root / "data" / "tiers", options.image_size)
+        args = ("referent=object", f"n={options.tier_trials}", "split=exam", f"seed={options.seed + 1}",
+                f"targets=[{','.join(quoted)}]")  # fmt: skip
+        stages["exam tiers"] = gen_command(args, root / "exams" / "tiers", options.image_size)
     return stages
 
 

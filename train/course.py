@@ -26,22 +26,22 @@ docs/checkpoints/libero_object-switch-lora.
 from __future__ import annotations
 
 import json
-import shlex
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from core.exam import Exam, read
-from gen.config import parse
 from jobs.cli import UserError, main
 from train.stages import (
     Commands,
     Ledger,
     begun_with,
+    canonical_once,
     cell,
     commit,
     exam_report,
     finished_report,
+    gen_command,
     generate_once,
     train_once,
     value,
@@ -113,31 +113,21 @@ def name(share: float) -> str:
 
 def _exams(options: CourseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """Both exams, made once."""
-    import torch._dynamo  # noqa: F401  before the canonical exam's GL context (train/stages.py generate_once: why)
-
-    from gen.products.canonical import CanonicalOptions, build
-
     root = Path(options.out)
     if "canonical" in options.exams:
-        folder = str(root / "canonical")
-        canonical = CanonicalOptions("libero_object", options.states, options.seed + 1, options.image_size, folder)
-        commands.append(f"python -m gen.canonical world=libero_object states={canonical.states} seed={canonical.seed} "
-                        f"image_size={canonical.image_size} out={canonical.out}")  # fmt: skip
-        if not (root / "canonical" / "exam.json").is_file():
-            with ledger.timing("generate canonical"):
-                build(canonical)
+        canonical_once("libero_object", options.states, options.seed + 1, options.image_size, root / "canonical", ledger,
+                       "generate canonical", commands)  # fmt: skip
     if "exam" in options.exams:
         line = ["referent=libero_object", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}"]
         _generate(options, root / "exam", line, ledger, commands, "generate exam")
-    made = {k: root / k for k in options.exams}
-    return {k: (read(str(folder)), folder) for k, folder in made.items()}
+    return {k: (read(str(root / k)), root / k) for k in options.exams}
 
 
-def _generate(options: CourseOptions, out: Path, line: list[str], ledger: Ledger, commands: Commands, stage: str) -> None:
-    """`python -m gen` once (resume=true: a generation killed with the run continues)."""
-    line = [*line, f"image_size={options.image_size}", f"workers={options.workers}", f"out={out}"]
-    commands.append("python -m gen " + " ".join(map(shlex.quote, line)))
-    generate_once(parse([*line, "overwrite=true", "resume=true"]), ledger, stage)
+def _generate(options: CourseOptions, out: Path, args: list[str], ledger: Ledger, commands: Commands, stage: str) -> None:
+    """`python -m gen` once."""
+    line, cfg = gen_command(args, out, options.image_size, options.workers)
+    commands.append(line)
+    generate_once(cfg, ledger, stage)
 
 
 def _train(options: CourseOptions, share: float, ledger: Ledger, commands: Commands) -> Path:

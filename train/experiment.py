@@ -42,6 +42,7 @@ from referents import registry
 from train.stages import (
     Ledger,
     brief,
+    canonical_once,
     cell,
     commit,
     exam_report,
@@ -177,18 +178,9 @@ def _canonical(options: ExperimentOptions, ledger: Ledger, commands: list[str]) 
     """A LIBERO world's canonical exam (gen.canonical), made once; None natively."""
     if not worlds.world(options.world).suite:
         return None
-    from gen.products.canonical import CanonicalOptions, build
-
     out = _out(options) / CANONICAL
-    chosen = CanonicalOptions(options.world, options.states, options.seed + 1, options.image_size, str(out))
-    commands.append(
-        f"python -m gen.canonical world={chosen.world} states={chosen.states} seed={chosen.seed} "
-        f"image_size={chosen.image_size} out={out}"
-    )
-    if not (out / "exam.json").is_file():
-        with ledger.timing("generate canonical"):
-            build(chosen)
-    return out
+    return canonical_once(options.world, options.states, options.seed + 1, options.image_size, out, ledger,
+                          "generate canonical", commands)  # fmt: skip
 
 
 def _runs(options: ExperimentOptions) -> list[tuple[str, str, int]]:

@@ -31,13 +31,12 @@ checkpoints in docs/checkpoints/libero-release-lora and docs/checkpoints/libero-
 from __future__ import annotations
 
 import json
-import shlex
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from core.exam import Exam, read
-from gen.config import GenConfig, parse
+from gen.config import GenConfig
 from gen.planning import mix
 from jobs.cli import UserError, main
 from referents import registry
@@ -45,10 +44,12 @@ from train.stages import (
     Commands,
     Ledger,
     begun_with,
+    canonical_once,
     cell,
     commit,
     exam_report,
     finished_report,
+    gen_command,
     generate_once,
     reference_report,
     train_once,
@@ -126,13 +127,6 @@ def claim(options: ReleaseOptions, begin: bool) -> dict:
     return begun_with(Path(options.out), wanted, RECORD, "release", "python -m train.release", begin)
 
 
-def _gen(options: ReleaseOptions, out: Path, *args: str) -> tuple[str, GenConfig]:
-    """A `python -m gen` command line and its validated config (resume=true: a generation killed
-    with the run continues; a finished one is not asked again)."""
-    line = [*args, f"image_size={options.image_size}", f"workers={options.workers}", f"out={out}"]
-    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true", "resume=true"])
-
-
 def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
     """Stage name -> (command, config): each chosen arm's dataset and every axis's exam."""
     root, stages = Path(options.out), {}
@@ -141,27 +135,21 @@ def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
         mixed = [f"referent=[{','.join(items)}]", f"n={options.per_type * len(items)}", f"seed={options.seed}"]
         if arm == "confounded":
             mixed.append(f"confound=[{','.join(AXES[a][1] for a in options.axes)}]")
-        stages[f"data {arm}"] = _gen(options, root / "data" / arm, *mixed)
+        stages[f"data {arm}"] = gen_command(mixed, root / "data" / arm, options.image_size, options.workers)
     for axis in options.axes:
         type_, world = mix.split(AXES[axis][0])
         exam = (f"referent={type_}", f"world={world}", f"n={options.trials}", "split=exam", f"seed={options.seed + 1}")
-        stages[f"exam {axis}"] = _gen(options, root / "exams" / axis, *exam)
+        stages[f"exam {axis}"] = gen_command(exam, root / "exams" / axis, options.image_size, options.workers)
     return stages
 
 
 def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> dict[str, tuple[Exam, Path]]:
     """LIBERO's canonical exams (gen.canonical), made once."""
-    from gen.products.canonical import CanonicalOptions, build
-
     made = {}
     for world in CANONICAL:
         out = Path(options.out) / "exams" / f"canonical-{world}"
-        chosen = CanonicalOptions(world, options.states, options.seed + 1, options.image_size, str(out))
-        commands.append(f"python -m gen.canonical world={world} states={chosen.states} seed={chosen.seed} "
-                        f"image_size={chosen.image_size} out={out}")  # fmt: skip
-        if not (out / "exam.json").is_file():
-            with ledger.timing(f"generate canonical {world}"):
-                build(chosen)
+        canonical_once(world, options.states, options.seed + 1, options.image_size, out, ledger, f"generate canonical {world}",
+                       commands)  # fmt: skip
         made[world] = (read(str(out)), out)
     return made
 

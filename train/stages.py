@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import shlex
 import shutil
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager, nullcontext
 from dataclasses import asdict
 from pathlib import Path
@@ -26,7 +27,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from core.exam import Exam
-from gen.config import GenConfig
+from gen.config import GenConfig, parse
 from jobs.cli import UserError
 from jobs.lock import held
 
@@ -112,6 +113,30 @@ def begun_with(root: Path, wanted: dict, record: str, what: str, command: str, b
         tmp.write_text(json.dumps(wanted, indent=2))
         tmp.replace(path)
         return wanted
+
+
+def gen_command(args: Sequence[str], out: Path, image_size: int, workers: int | None = None) -> tuple[str, GenConfig]:
+    """A `python -m gen` command line and its validated config (resume=true: a generation killed
+    with the experiment continues; a finished one is not asked again)."""
+    line = [*args, f"image_size={image_size}", *([f"workers={workers}"] if workers is not None else []), f"out={out}"]
+    return "python -m gen " + " ".join(map(shlex.quote, line)), parse([*line, "overwrite=true", "resume=true"])
+
+
+def canonical_once(
+    world: str, states: int, seed: int, image_size: int, out: Path, ledger: Ledger, stage: str, commands: Commands | list[str]
+) -> Path:
+    """LIBERO's canonical exam of `world` (gen.canonical) in `out`, built unless it is there; its
+    command line added to `commands`."""
+    import torch._dynamo  # noqa: F401  before the exam's GL context (generate_once: why)
+
+    from gen.products.canonical import CanonicalOptions, build
+
+    chosen = CanonicalOptions(world, states, seed, image_size, str(out))
+    commands.append(f"python -m gen.canonical world={world} states={states} seed={seed} image_size={image_size} out={out}")
+    if not (out / "exam.json").is_file():
+        with ledger.timing(stage):
+            build(chosen)
+    return out
 
 
 def generate_once(cfg: GenConfig, ledger: Ledger, stage: str) -> None:
