@@ -3,6 +3,7 @@ of its demonstrations switched mid-course, beside the committed checkpoint train
 
 python -m train.course                        # every stage; a killed run continues where it stopped
 python -m train.course 'shares=[0.3]'         # one share: two processes on one out= run the shares side by side
+python -m train.course 'shares=[]'            # only the takes of the checkpoint trained without, beside a run that trains
 python -m train.course train=false            # nothing made, trained or taken: the results from what is finished
 
 Stages, each done once and reused (train/stages.py), so the run spans as many sittings as it needs:
@@ -61,7 +62,9 @@ DETERMINING = ("n", "steps", "decay", "lr_floor", "point_weight", "trials", "sta
 
 @dataclass
 class CourseOptions:
-    shares: list[float] = field(default_factory=lambda: [0.15, 0.3])  # switched shares this process trains and takes
+    shares: list[float] = field(
+        default_factory=lambda: [0.15, 0.3]
+    )  # switched shares this process trains and takes ([]: only without's takes)
     n: int = 300  # demonstrations in each training set (docs/RESULTS_LIBERO.md's recipe)
     steps: int = 4500
     decay: int = 1500  # the last this many steps cool the learning rate down
@@ -84,8 +87,10 @@ class CourseOptions:
 
 
 def _check(options: CourseOptions) -> None:
-    if not options.shares or any(not 0 < s <= 1 for s in options.shares) or len(set(options.shares)) != len(options.shares):
-        raise UserError(f"shares must be one or more distinct shares in (0, 1], got {options.shares}")
+    if any(not 0 < s <= 1 for s in options.shares) or len(set(options.shares)) != len(options.shares):
+        raise UserError(f"shares must be distinct shares in (0, 1], got {options.shares}")
+    if not options.shares and not options.without:
+        raise UserError("shares=[] and without='' leave nothing to train or take")
     if not options.sims or any(s not in SIMS for s in options.sims):
         raise UserError(f"sims must be some of {', '.join(SIMS)}, got {options.sims}")
     for name in ("n", "steps", "trials", "states", "replan", "workers", "threads"):
