@@ -64,7 +64,7 @@ DETERMINING = ("n", "steps", "decay", "lr_floor", "point_weight", "trials", "sta
 class CourseOptions:
     shares: list[float] = field(
         default_factory=lambda: [0.15, 0.3]
-    )  # switched shares this process trains and takes ([]: only without's takes)
+    )  # switched shares trained and taken ([]: only without's takes)
     n: int = 300  # demonstrations in each training set (docs/RESULTS_LIBERO.md's recipe)
     steps: int = 4500
     decay: int = 1500  # the last this many steps cool the learning rate down
