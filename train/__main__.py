@@ -5,6 +5,7 @@ train/fit.py); `python -m eval policy=ckpt:<out>` then takes an exam with it."""
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 from jobs.cli import UserError, main
 from train.fit import TrainConfig
@@ -23,6 +24,10 @@ def validate(cfg: TrainConfig) -> None:
             raise UserError(f"{name} must be at least 0, got {getattr(cfg, name)}")
     if not 0 <= cfg.lr_floor <= 1:
         raise UserError(f"lr_floor is a fraction of the peak learning rate, between 0 and 1; got {cfg.lr_floor}")
+    if cfg.favour and (not cfg.balance or not 0 < cfg.favour_share < 1):
+        raise UserError(f"favour needs balance=true and favour_share in (0, 1), got {cfg.balance}, {cfg.favour_share}")
+    if cfg.branch and not Path(cfg.branch).is_file():
+        raise UserError(f"branch={cfg.branch} is no training state (a run's stable.pt or last.pt)")
     if cfg.lora.rank < 1:
         raise UserError(f"lora.rank must be at least 1, got {cfg.lora.rank}")
 

@@ -224,16 +224,39 @@ def groups(frames: Frames) -> np.ndarray:
     return np.argsort(np.argsort(first))[inverse]
 
 
-def sample(frames: Frames, rng: np.random.Generator, n: int, balance: bool, group: np.ndarray | None = None) -> np.ndarray:
+def favoured(frames: Frames, group: np.ndarray, types: list[str], share: float) -> np.ndarray:
+    """Each balance group's chance of being drawn when the groups of the referent `types` together
+    take `share` of every batch, split equally among them, and the other groups the rest, equally:
+    more of a type that lags, the mix's others still in every batch."""
+    if frames.referent is None:
+        raise DatasetError(f"favour={types} needs a mix whose episodes record their referent type (meta/scenes.parquet)")
+    kind = frames.referent[frames.episode[np.unique(group, return_index=True)[1]]]
+    missing = sorted(set(types) - set(kind))
+    if missing or set(types) == set(kind):
+        held = ", ".join(sorted(set(kind)))
+        raise DatasetError(f"favour={types} must name some, not all, of the referent types the data holds ({held})")
+    chosen = np.isin(kind, types)
+    return np.where(chosen, share / chosen.sum(), (1 - share) / (~chosen).sum())
+
+
+def sample(
+    frames: Frames,
+    rng: np.random.Generator,
+    n: int,
+    balance: bool,
+    group: np.ndarray | None = None,
+    chances: np.ndarray | None = None,
+) -> np.ndarray:
     """`n` frame indices: uniform over all frames, or (`balance`) each from a group (`groups`: a
-    dataset, a referent type of a mix) drawn uniformly, so a small one weighs as much as a large one."""
+    dataset, a referent type of a mix) drawn uniformly, so a small one weighs as much as a large one,
+    or with the groups' `chances` (`favoured`)."""
     group = groups(frames) if group is None and balance else group
     if not balance or group is None or group.max() == 0:
         return rng.integers(0, len(frames), n)
     members = np.argsort(group, kind="stable")
     counts = np.bincount(group)
     offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    which = rng.integers(0, len(counts), n)
+    which = rng.integers(0, len(counts), n) if chances is None else rng.choice(len(counts), n, p=chances)
     return members[offsets[which] + (rng.random(n) * counts[which]).astype(np.int64)]
 
 

@@ -16,7 +16,9 @@ fp32 by default: with this project's torch (2.14.1, a CUDA build run on the CPU)
 made a step ~15x slower here. A checkpoint (`last.pt`: weights, optimiser, step, random state)
 is written every `save_every` steps, at the end, and as `stable.pt` where a cool-down begins, so
 `resume=true` continues a killed run, or extends a finished one from the latest of those states
-whose learning rates so far match this run's schedule; `model.pt` is the final policy.
+whose learning rates so far match this run's schedule; `model.pt` is the final policy. `branch`
+continues another run's saved state in a new `out` (its cool-down redone, say, with `favour`: some
+types of a mix drawn more often than the balance gives them).
 """
 
 from __future__ import annotations
@@ -63,6 +65,9 @@ class LoraOptions:
 class TrainConfig:
     dataset: Any = "datasets/object"  # a dataset folder, or several: 'dataset=[a,b]' trains one policy on their union
     balance: bool = True  # each batch draws its frames equally from each dataset and each referent type of a mix
+    favour: list[str] = field(default_factory=list)  # referent types of a mix that take `favour_share` of each batch
+    favour_share: float = 0.5  # with `favour`: their share of each batch together (the other types split the rest)
+    branch: str = ""  # a training state of another run (its stable.pt, last.pt) this run continues from, in `out`
     out: str = "runs/train/tiny"
     policy: str = "tiny"
     finetune: str = "lora"  # lora | full | frozen
@@ -188,6 +193,10 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     peaks = [cfg.lr, text_lr]
     step, history = 0, []
     record = _resumable(cfg, out, model.config.to_dict()) if cfg.resume else None
+    if record is None and cfg.branch:
+        record = _continued(cfg, Path(cfg.branch), model.config.to_dict())
+        if record is None:
+            raise ValueError(f"branch={cfg.branch} was trained on another learning-rate schedule (lr, warmup, decay, lr_floor)")
     if record is not None:
         model.load_state_dict(record["weights"], strict=False)
         optimizer.load_state_dict(record["optimizer"])
@@ -213,13 +222,14 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
         reaching = until_grasp(frames)
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
     draw_from = data.groups(frames) if cfg.balance else None
+    chances = data.favoured(frames, draw_from, cfg.favour, cfg.favour_share) if cfg.favour else None
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()
     while step < cfg.steps:
         if cfg.decay and step == decay_start(cfg):  # where a longer run would branch off
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
-        index = data.sample(frames, rng, cfg.batch_size, cfg.balance, draw_from)
+        index = data.sample(frames, rng, cfg.batch_size, cfg.balance, draw_from, chances)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
         shifted = {c: _shift(frames.images[c][index], cfg.shift, rng) for c in model.cameras}
         images = {c: torch.from_numpy(moved) for c, (moved, _) in shifted.items()}
@@ -279,17 +289,27 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
 def _resumable(cfg: TrainConfig, out: Path, config: dict) -> dict | None:
     """The latest saved state in `out` (last.pt, else stable.pt) that this run continues: the
     same model, and every learning rate it logged is the one this run's schedule gives there."""
-    import torch
 
     found = [out / name for name in (LAST, STABLE) if (out / name).is_file()]
     for path in found:
-        record = torch.load(path, map_location="cpu", weights_only=False)
-        if record["config"] != config:
-            raise ValueError(f"resume=true but {path} was trained with another model config: {record['config']}")
-        if all(np.isclose(h["lr"], cfg.lr * schedule(cfg, h["step"] - 1), rtol=1e-9, atol=0) for h in record["history"]):
+        record = _continued(cfg, path, config)
+        if record is not None:
             return record
     if found:
         raise ValueError(f"resume=true but {out} holds a run on another learning-rate schedule (lr, warmup, decay, lr_floor)")
+    return None
+
+
+def _continued(cfg: TrainConfig, path: Path, config: dict) -> dict | None:
+    """The training state in `path` if this run continues it: the same model, and every learning
+    rate it logged the one this run's schedule gives there; None where the schedules differ."""
+    import torch
+
+    record = torch.load(path, map_location="cpu", weights_only=False)
+    if record["config"] != config:
+        raise ValueError(f"{path} was trained with another model config: {record['config']}")
+    if all(np.isclose(h["lr"], cfg.lr * schedule(cfg, h["step"] - 1), rtol=1e-9, atol=0) for h in record["history"]):
+        return record
     return None
 
 

@@ -4,6 +4,7 @@ LIBERO's own simulator, beside the same mix laid out as LIBERO's demonstrations 
 python -m train.release                          # every stage; a killed run continues where it stopped
 python -m train.release 'arms=[confounded]'      # one arm: two processes on one out= run the arms side by side
 python -m train.release train=false              # nothing trained or taken: the docs from what is finished
+python -m train.release 'arms=[]' 'favour=[goal]' # an axis that fell short: the deconfounded cool-down redone favouring it
 
 Stages, each done once and reused (train/stages.py), so the run spans as many sittings as it needs:
 
@@ -21,7 +22,10 @@ Stages, each done once and reused (train/stages.py), so the run spans as many si
   rate to `lr_floor`, every batch drawing the seven types equally (`balance`);
 * **takes**: each arm on each axis's exam in our rebuild, with the `position` shortcut (and
   `named_place`, where a type has one) on the same rows; in LIBERO's simulator for the arms in
-  `libero`; the deconfounded checkpoint on the canonical exams in LIBERO's simulator.
+  `libero`; the deconfounded checkpoint on the canonical exams in LIBERO's simulator;
+* **favoured** (`favour`, the fix tried once for axes that fall short): the deconfounded arm's
+  cool-down redone from where it began (its `stable.pt`), the batches drawing the favoured axes'
+  types `favour_share` of the time, and that checkpoint's takes of those axes in both simulators.
 
 Results (from the finished reports, whichever process finishes last): docs/RESULTS_LIBERO_AXES.md,
 docs/results_libero_axes.json (rows: axis, arm, sim, faces) and docs/libero_axes.png; the
@@ -68,6 +72,7 @@ AXES: dict[str, tuple[str, str]] = {
     "composition": ("composition@libero_object", "position"),
 }
 ARMS = ("deconfounded", "confounded")
+FAVOURED = "favoured"  # the deconfounded arm with its cool-down redone favouring the axes in `favour`
 SIMS = ("ours", "libero")
 CANONICAL = ("libero_object", "libero_spatial", "libero_goal")
 COMMITTED = {"deconfounded": "libero-release-lora", "confounded": "libero-release-confounded-lora"}
@@ -81,7 +86,7 @@ SHOWN = ("task", "obeyed_name", "true_target", "occ", "nonsense", "switch_obeyed
 
 @dataclass
 class ReleaseOptions:
-    arms: list[str] = field(default_factory=lambda: list(ARMS))  # the arms this process trains and takes
+    arms: list[str] = field(default_factory=lambda: list(ARMS))  # the arms this process trains and takes ([]: only favour's)
     axes: list[str] = field(default_factory=lambda: list(AXES))  # the types mixed (all seven: the release)
     per_type: int = 200  # episodes of each type in each arm's dataset
     trials: int = 20  # trials of each axis's held-out exam
@@ -97,6 +102,8 @@ class ReleaseOptions:
     workers: int = 2  # generation and exam processes
     threads: int = 2  # training threads (1 each when the arms train side by side)
     libero: list[str] = field(default_factory=lambda: list(ARMS))  # arms whose exams LIBERO's simulator takes too
+    favour: list[str] = field(default_factory=list)  # axes that fell short: the deconfounded cool-down redone favouring them
+    favour_share: float = 3 / 7  # the favoured axes' share of each batch in that cool-down (balanced, each has 1/7)
     canonical: bool = True  # the deconfounded checkpoint on LIBERO's canonical exams in LIBERO's simulator
     train: bool = True  # false: nothing made, trained or taken; the docs from what is finished
     commit_mb: float = 20.0  # checkpoints up to this size are copied to docs/checkpoints/
@@ -107,8 +114,15 @@ class ReleaseOptions:
 def _check(options: ReleaseOptions) -> None:
     for name, allowed in (("arms", ARMS), ("axes", tuple(AXES)), ("libero", ARMS)):
         chosen = getattr(options, name)
-        if any(c not in allowed for c in chosen) or len(set(chosen)) != len(chosen) or (name != "libero" and not chosen):
+        if any(c not in allowed for c in chosen) or len(set(chosen)) != len(chosen) or (name == "axes" and not chosen):
             raise UserError(f"{name} must be some of {', '.join(allowed)}, each once; got {chosen}")
+    if not options.arms and not options.favour:
+        raise UserError("arms=[] trains nothing unless favour names the axes whose cool-down to redo")
+    if any(a not in options.axes for a in options.favour) or len(set(options.favour)) != len(options.favour):
+        raise UserError(f"favour must name axes of the mix ({', '.join(options.axes)}), each once; got {options.favour}")
+    if options.favour and (len(options.favour) == len(options.axes) or not 0 < options.favour_share < 1):
+        raise UserError(f"favour must leave some axes out and favour_share lie in (0, 1); got {options.favour}, "
+                        f"{options.favour_share}")  # fmt: skip
     if len(options.axes) < 2:
         raise UserError(f"axes must name two or more types to mix, got {options.axes}")
     for name in ("per_type", "trials", "states", "steps_per_axis", "replan", "workers", "threads"):
@@ -155,13 +169,15 @@ def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> d
 
 
 def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: Commands) -> dict | None:
-    """Train (or continue, or reuse) the arm's LoRA; its log."""
-    from train.fit import LoraOptions, TrainConfig
+    """Train (or continue, or reuse) the arm's LoRA; its log. The favoured arm branches from the
+    deconfounded arm's state where its cool-down began, on the same data."""
+    from train.fit import STABLE, LoraOptions, TrainConfig
 
     root = Path(options.out)
     steps = options.steps_per_axis * len(options.axes)
+    favoured = arm == FAVOURED
     cfg = TrainConfig(
-        dataset=str(root / "data" / arm),
+        dataset=str(root / "data" / ("deconfounded" if favoured else arm)),
         out=str(root / "ckpt" / arm),
         steps=steps,
         decay=int(round(steps * options.cool)),
@@ -169,16 +185,26 @@ def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: Commands
         lora=LoraOptions(16),
         point_weight=options.point_weight,
         balance=options.balance,
+        favour=[recorded(a) for a in options.favour] if favoured else [],
+        favour_share=options.favour_share,
+        branch=str(root / "ckpt" / "deconfounded" / STABLE) if favoured else "",
         threads=options.threads,
         seed=options.seed,
         resume=True,
     )
+    fix = f" favour=[{','.join(cfg.favour)}] favour_share={cfg.favour_share:.4g} branch={cfg.branch}" if favoured else ""
     commands.append(
         f"python -m train dataset={cfg.dataset} policy=tiny lora.rank=16 steps={steps} decay={cfg.decay} "
-        f"lr_floor={cfg.lr_floor} point_weight={cfg.point_weight} balance={str(cfg.balance).lower()} "
+        f"lr_floor={cfg.lr_floor} point_weight={cfg.point_weight} balance={str(cfg.balance).lower()}{fix} "
         f"threads={cfg.threads} seed={cfg.seed} out={cfg.out}"
     )
     return train_once(cfg, ledger, f"train {arm}")
+
+
+def recorded(axis: str) -> str:
+    """The referent type the axis's episodes record (LIBERO's own kinds of task by their suite's name)."""
+    type_, world = mix.split(AXES[axis][0])
+    return registry.load(type_, world=world).name
 
 
 def _report_dir(root: Path, arm: str, exam: str, sim: str) -> Path:
@@ -212,9 +238,14 @@ def run(options: ReleaseOptions) -> None:
         trained[arm] = root / "ckpt" / arm
         commit(trained[arm] / MODEL_FILE, Path(options.docs) / "checkpoints" / COMMITTED[arm], options.commit_mb)
         _takes(options, arm, trained[arm], exams, "ours", ledger, commands)
+    if options.favour:
+        _train(options, FAVOURED, ledger, commands)
+        trained[FAVOURED] = root / "ckpt" / FAVOURED
+        _takes(options, FAVOURED, trained[FAVOURED], {a: exams[a] for a in options.favour}, "ours", ledger, commands)
     for arm, weights in trained.items():
-        if arm in options.libero:
-            _takes(options, arm, weights, exams, "libero", ledger, commands)
+        if arm in options.libero or arm == FAVOURED:
+            chosen = {a: exams[a] for a in options.favour} if arm == FAVOURED else exams
+            _takes(options, arm, weights, chosen, "libero", ledger, commands)
     if "deconfounded" in trained:
         named = {f"canonical-{world}": made for world, made in canonical.items()}
         _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, baseline=False)
@@ -248,16 +279,23 @@ def collect(options: ReleaseOptions) -> dict:
 
     root = Path(options.out)
     rows, not_run, training = [], [], {}
-    for arm in ARMS:
+    for arm in (*ARMS, FAVOURED):
         weights = root / "ckpt" / arm
         log = train_log(weights)
         if log is None:
-            data = root / "data" / arm
-            made = "" if (data / "meta").is_dir() else f" (its data: {len(Partial(data).saved())} episodes so far)"
-            not_run.append(f"training {arm}{made}")
+            if arm != FAVOURED:
+                data = root / "data" / arm
+                made = "" if (data / "meta").is_dir() else f" (its data: {len(Partial(data).saved())} episodes so far)"
+                not_run.append(f"training {arm}{made}")
+            elif options.favour:
+                not_run.append(f"training {arm}")
             continue
         training[arm] = {"steps": log["steps"], "final_loss": log["final_loss"],
                          "loss_curve": [(h["step"], round(h["loss"], 5)) for h in log["history"]]}  # fmt: skip
+        if log["config"].get("favour"):
+            cfg = log["config"]
+            favoured = [a for a in AXES if recorded(a) in cfg["favour"]]
+            training[arm] |= {"favour": favoured, "favour_share": cfg["favour_share"], "branch": cfg["branch"]}
         digest = weights_digest(weights)
         for name in [*AXES, *(f"canonical-{w}" for w in CANONICAL)]:
             for sim in SIMS:
@@ -268,6 +306,7 @@ def collect(options: ReleaseOptions) -> dict:
                 rows.append({
                     "axis": axis, "exam": exam, "arm": arm, "sim": sim, "faces": report["faces"],
                     "position": (report.get("baseline") or None), "rollouts": report.get("rollouts"),
+                    "reach_probe": report.get("reach_probe"), "per_object": report.get("per_object"),
                     "simulator_versions": report.get("simulator_versions"),
                 })  # fmt: skip
     for axis in AXES:
@@ -357,14 +396,18 @@ def write_docs(results: dict, docs: Path) -> None:
         ]
         for r in canonical:
             lines.append(f"| {r['axis']} | {_face(r, 'task')} | {_face(r, 'obeyed_name')} | {_face(r, 'true_target')} |")
+    lines += _short_of(results)
     if results["training"]:
         lines += ["", "## Training", ""]
-        lines += [f"- {arm}: {t['steps']} steps, final loss {t['final_loss']:.4f}" for arm, t in results["training"].items()]
+        for arm, t in results["training"].items():
+            how = (f" (the deconfounded run from its cool-down's start, `{t['branch']}`, the batches drawing "
+                   f"{', '.join(t['favour'])} {t['favour_share']:.0%} of the time)") if "favour" in t else ""  # fmt: skip
+            lines.append(f"- {arm}: {t['steps']} steps{how}, final loss {t['final_loss']:.4f}")
     missing = list(results["not_run"]) + [
         f"{arm} on {axis} ({sim})"
-        for arm in results["training"]
-        for axis in s["axes"]
-        for sim in ("ours", *(["libero"] if arm in results["libero_arms"] else []))
+        for arm, t in results["training"].items()
+        for axis in t.get("favour", s["axes"])
+        for sim in ("ours", *(["libero"] if arm in results["libero_arms"] or arm == FAVOURED else []))
         if not _find(results, axis, arm, sim)
     ]
     if missing:
@@ -373,6 +416,40 @@ def write_docs(results: dict, docs: Path) -> None:
     lines += ["Wall time per stage (s, this 2-core machine, summed over the invocations that did its work):", ""]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
     (docs / RESULTS).write_text("\n".join(lines) + "\n")
+
+
+def _short_of(results: dict) -> list[str]:
+    """Why an axis falls short, from its takes: where each failed rollout's hand went (the reach
+    probe: at what was asked for but not done, the grasp or the placing; at another object, the
+    name not read; at neither, the reach itself), and the deconfounded arm's rates per asked-for
+    value on the axes below 75% obeyed."""
+    probed = [r for r in results["rows"] if r["exam"] == "axis" and r["arm"] != "confounded" and r.get("reach_probe")]
+    if not probed:
+        return []
+    lines = [
+        "",
+        "## Where an axis falls short",
+        "",
+        "Each failed rollout by where the hand went (within 5 cm): at what was asked for (the name read, the "
+        "grasp or placing failed), at another object (the name not read), or at neither (the reach failed).",
+        "",
+        "| axis | arm | sim | task | task failed: asked / other / neither | obeyed name | swap failed: named / other / neither |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in probed:
+        where = ("reached_target", "went_distractor", "neither")
+        task, swap = (" / ".join(str(r["reach_probe"].get(f, {}).get(k, 0)) for k in where) for f in ("task", "obeyed_name"))
+        obeyed = _face(r, "obeyed_name")
+        lines.append(f"| {r['axis']} | {r['arm']} | {r['sim']} | {_face(r, 'task')} | {task} | {obeyed} | {swap} |")
+    for r in probed:
+        if r["arm"] != "deconfounded" or not r.get("per_object") or r["faces"]["obeyed_name"]["rate"] >= 0.75:
+            continue
+        lines += ["", f"{r['axis']}, deconfounded, {r['sim']}: per value asked for", ""]
+        lines += ["| value | task | obeyed name |", "|---|---|---|"]
+        for value_, f in sorted(r["per_object"].items()):
+            rates = (cell(f[face]) if face in f else "—" for face in ("task", "obeyed_name"))
+            lines.append(f"| {value_} | {' | '.join(rates)} |")
+    return lines
 
 
 def _face(row: dict | None, face: str) -> str:
@@ -419,6 +496,11 @@ def plot(results: dict, path: Path) -> None:
 
 def release(options: ReleaseOptions) -> None:
     _check(options)
+    from train.fit import STABLE
+
+    cooled_from = Path(options.out) / "ckpt" / "deconfounded" / STABLE
+    if options.train and options.favour and "deconfounded" not in options.arms and not cooled_from.is_file():
+        raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({cooled_from})")
     begun = claim(options, begin=options.train)
     if options.train:
         run(options)

@@ -207,8 +207,10 @@ def train_log(ckpt: Path) -> dict | None:
 
 def recipe(config: dict) -> tuple:
     """What decides a run's weights besides its data and seed: the learning rate at every step, and
-    the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none)."""
-    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight"))
+    the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none), and
+    the types a run favours with their share (none before `favour` existed)."""
+    favoured = (tuple(config["favour"]), config["favour_share"]) if config.get("favour") else ()
+    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight")) + favoured
 
 
 def exam_report(

@@ -68,10 +68,11 @@ def test_a_folder_the_release_did_not_begin_is_refused(train: str, tmp_path: Pat
 @pytest.mark.parametrize(
     ("arg", "needle"),
     [("arms=[both]", "arms must be some of deconfounded, confounded"), ("axes=[object]", "two or more"),
-     ("states=51", "at most 50")],
+     ("states=51", "at most 50"), ("arms=[]", "trains nothing unless favour"), ("favour=[verb]", "favour must name axes"),
+     ("favour=[goal,goal]", "each once"), ("arms=[] favour=[goal]", "train that arm first")],
 )  # fmt: skip
 def test_bad_options_are_refused_in_one_line(arg: str, needle: str, tmp_path: Path) -> None:
-    argv = [arg, f"out={tmp_path / 'r'}", f"docs={tmp_path / 'd'}"]
+    argv = [*arg.split(), f"out={tmp_path / 'r'}", f"docs={tmp_path / 'd'}"]
     done = subprocess.run([sys.executable, "-m", "train.release", *argv], capture_output=True, text=True)
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr

@@ -136,6 +136,12 @@ def test_batches_draw_each_type_of_a_mix_equally(mixed: Path) -> None:
     lengths = frames.ends - frames.starts
     longest = frames.referent[int(np.argmax(lengths))]
     assert np.mean(uniform == longest) > np.mean(drawn == longest)  # without balance, a longer type weighs more
+    group = data.groups(frames)
+    chances = data.favoured(frames, group, ["libero_goal", "color"], 0.5)  # a fix for lagging types
+    favoured = frames.referent[frames.episode[data.sample(frames, np.random.default_rng(0), 7000, True, group, chances)]]
+    assert abs(np.mean(favoured == "libero_goal") - 0.25) < 0.03 and abs(np.mean(favoured == "negation") - 0.1) < 0.03
+    with pytest.raises(data.DatasetError, match="some, not all, of the referent types"):
+        data.favoured(frames, group, ["goal"], 0.5)  # the type LIBERO-Goal's episodes record is libero_goal
 
 
 def test_a_picture_of_each_types_first_frame(mixed: Path) -> None:

@@ -27,7 +27,7 @@ from gen.lerobot.video import encode_episode
 from gen.lerobot.writer import Episode, LeRobotWriter, Recording
 from helpers import ONE_TRIAL_64, Shared, make_dataset
 from jobs.cli import UserError, main
-from train.fit import TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
+from train.fit import STABLE, TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
 from train.stages import TIMINGS, Ledger, made
 
 
@@ -74,6 +74,12 @@ def test_a_cooled_run_extends_from_where_its_cool_down_began(object_dataset: Pat
     assert all(torch.equal(extended[k], direct[k]) for k in direct)
     with pytest.raises(ValueError, match="another learning-rate schedule"):
         train(run, 9, lr_floor=0.5)  # a cosine over every step: no saved state had its learning rates
+    branched = train(tmp_path / "branch", 7, decay=2, lr_floor=0.1, branch=str(run / STABLE))  # its step 5
+    assert branched["history"] == straight["history"]  # the same cool-down redone in another folder
+    again = torch.load(tmp_path / "branch" / "model.pt", weights_only=False)["weights"]
+    assert all(torch.equal(again[k], direct[k]) for k in direct) and (run / "model.pt").is_file()
+    with pytest.raises(ValueError, match="branch=.* another learning-rate schedule"):
+        train(tmp_path / "other", 9, lr_floor=0.5, branch=str(run / STABLE))
 
 
 def test_the_learning_rate_warms_up_then_follows_a_cosine_to_its_floor() -> None:
