@@ -228,6 +228,31 @@ KINDS |= {
     )
 }
 
+# LIBERO-10's objects (turbosquid_objects, stable_scanned_objects), resting as its initial states
+# stand them: the moka pot turned half about, the frying pan a quarter, the mugs a quarter back, the
+# book on its edge (LIBERO turns it anew within -135..-90 degrees at each reset; the kind rests at
+# -90). The handles put the moka pot's and the pan's extents off their origins (1.8 and 8.1 cm
+# along y): where LIBERO-10's scenes stand them, their initial states say.
+MUG_REST = (HALF, 0.0, 0.0, -HALF)
+
+
+def _turbosquid(name: str, size: tuple[float, float, float], bottom: float, quat: tuple[float, ...], **fields: object) -> Kind:
+    """A TurboSquid model of LIBERO's (turbosquid_objects), resting turned by `quat`."""
+    return Kind(name, "libero", size, bottom, params={"xml": f"turbosquid_objects/{name}/{name}.xml"}, quat=quat, **fields)
+
+
+KINDS |= {
+    k.name: k
+    for k in (
+        _turbosquid("moka_pot", (0.0814, 0.1475, 0.1518), 0.0661, FLAT),
+        _scanned("chefmate_8_frypan", (0.2044, 0.3561, 0.0579), -0.0008),
+        _turbosquid("porcelain_mug", (0.0963, 0.1246, 0.1061), -0.0024, MUG_REST, called="white mug"),
+        _turbosquid("white_yellow_mug", (0.1061, 0.1397, 0.1032), 0.0001, MUG_REST, called="yellow and white mug"),
+        _turbosquid("red_coffee_mug", (0.0932, 0.1229, 0.1327), 0.0018, MUG_REST),
+        _turbosquid("black_book", (0.1104, 0.0287, 0.1344), -0.0022, MUG_REST),
+    )
+}
+
 # LIBERO's fixtures (envs/objects/articulated_objects.py): loaded with no free joint, posed by their
 # region; their inner joints (a cabinet's drawers, a stove's knob) are in LIBERO's state vectors.
 FIXTURES: dict[str, Fixture] = {
@@ -331,7 +356,7 @@ def suites(world_suite: str) -> tuple[str, ...]:
 
 def base_suite(suite: str) -> str:
     """The LIBERO suite a LIBERO-PRO suite perturbs: `libero_object` for `libero_object_swap`."""
-    for base in ("libero_object", "libero_spatial", "libero_goal"):
+    for base in ("libero_object", "libero_spatial", "libero_goal", "libero_10"):
         if suite == base or suite.startswith(f"{base}_"):
             return base
     return suite

@@ -222,3 +222,16 @@ def test_a_policy_through_several_suites_gets_one_report(tmp_path: Path) -> None
     base, swap = (r["faces"] for r in report["suites"])
     assert base["task"]["rate"] == 1.0 and base["obeyed_name"]["rate"] == 0.0 and base["true_target"]["rate"] == 1.0
     assert swap["task"]["rate"] <= 0.2
+
+
+def test_liberos_ten_objects_are_kinds_and_its_pro_tasks_find_their_base() -> None:
+    """LIBERO-10's first pieces (issue 53): every object its ten problems name is one of our kinds
+    (the moka pots, the frying pan, the mugs and the book measured as the others are: test_scene's
+    extents), and every task of LIBERO-PRO's libero_10 suites finds the task it perturbs, the
+    added-object suites' renamed files included."""
+    named = {kind for task in libero.tasks("libero_10") for kind in libero.problem("libero_10", task).objects.values()}
+    assert len(named) > 15 and named <= set(libero.KINDS), sorted(named - set(libero.KINDS))
+    perturbed = libero.suites("libero_10")[1:]
+    assert {"libero_10_swap", "libero_10_lan", "libero_10_with_mug"} <= set(perturbed)
+    for suite in perturbed:
+        assert {libero.base_task(suite, task) for task in libero.tasks(suite)} <= set(libero.tasks("libero_10")), suite
