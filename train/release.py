@@ -353,7 +353,12 @@ def write_docs(results: dict, docs: Path) -> None:
         "target region and LIBERO-Spatial's bowl between the plate and the ramekin): that is what those "
         "instructions would teach if collected as LIBERO collects its own, the target found by its place. "
         "In LIBERO-Goal's one layout every goal stands in every scene, so the layout holds no shortcut "
-        "among a task's alternatives (its audit finds none); what it withholds is any scene but that one.",
+        "among a task's alternatives (its audit finds none); what it withholds is any scene but that one. "
+        "A LIBERO-Spatial relation's words name a place of the table (next to the plate, on the cookie box), "
+        "and the places never move: laid out as LIBERO lays them, each place is always paired with the same "
+        "other, but the words still say where the bowl is. What the confounded arm can learn instead of the "
+        "words is the pairing (`position` on the held-out exam, whose pairs differ); where it obeys above that, "
+        "it reads the place the words name, which is the relation.",
     ]
     axis_rows = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
     if axis_rows:
