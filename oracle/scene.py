@@ -48,7 +48,6 @@ ARM_JOINTS = tuple(f"robot0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("gripper0_finger_joint1", "gripper0_finger_joint2")
 EE_SITE = "gripper0_grip_site"
 HAND_BODY = "robot0_right_hand"  # robosuite's `eef_quat` is this body's orientation
-LIBERO_TABLE_FRICTION = (0.6, 0.005, 0.0001)  # BDDLBaseDomain's table arena
 
 
 HULL_POINTS = 200  # hand_gap takes a mesh of more vertices as its bounding box: a few cm of box cost less than its hull
@@ -99,7 +98,7 @@ def _libero_arena(world: worlds.World) -> Arena:
         arena = Arena(scene)
     else:
         size, top = world.table
-        arena = TableArena(table_full_size=size, table_offset=top, table_friction=LIBERO_TABLE_FRICTION, xml=scene)
+        arena = TableArena(table_full_size=size, table_offset=top, table_friction=world.table_friction, xml=scene)
     for texture, file in (("texplane", world.arena["floor"]), ("tex-wall", world.arena["wall"])):
         node = arena.asset.find(f"./texture[@name='{texture}']")
         node.set("file", str(Path(node.get("file")).parent / file))

@@ -148,6 +148,31 @@ def initial_state_pictures(
     return pictures, farthest
 
 
+# robosuite 1.5 calls the mount's bodies fixed_mount0_*; robosuite 1.4's empty mount0_base and the
+# cameras no recorded frame comes from are left out of the physics compared
+NOT_COMPARED = ("mount0_base", "frontview", "birdview", "sideview", "galleryview", "robotview", "canonical_agentview")
+NOT_COMPARED += ("paperview",)  # LIBERO's kitchen, living room and study problems add it
+
+
+def same_physics(theirs: Mapping[str, np.ndarray], ours: Mapping[str, np.ndarray], fixtures: Iterable[str]) -> list[str]:
+    """Assert that every array of LIBERO's compiled scene (eval/sims/libero_env/reference.py
+    `model_arrays`) has its twin in ours with the same values, the poses of the `fixtures` (their
+    instance names) aside: LIBERO draws them anew at each reset, within their regions. Returns the
+    names compared."""
+    moved = tuple(f"{name}_main" for name in fixtures)
+    compared = [
+        k
+        for k in theirs
+        if not k.endswith(NOT_COMPARED) and not (k.startswith(("body_pos", "body_quat", "body_ipos")) and k.endswith(moved))
+    ]
+    named_ = {k: k.replace(":mount0_", ":fixed_mount0_") for k in compared}
+    missing = [k for k in compared if named_[k] not in ours]
+    assert not missing, f"LIBERO's scene has what ours does not: {missing[:5]}"
+    differ = [k for k in compared if not np.allclose(ours[named_[k]], theirs[k], rtol=1e-5, atol=1e-6)]
+    assert not differ, {k: (theirs[k].tolist(), ours[named_[k]].tolist()) for k in differ[:5]}
+    return compared
+
+
 def liberos_own(command: str, request: dict, out: Path) -> Path:
     """Run a command of eval/sims/libero_env/reference.py in LIBERO's own environment (`.venv-libero`)."""
     assert LIBERO_PYTHON.is_file(), f"{LIBERO_PYTHON} is missing: `make setup` builds LIBERO's reference environment"

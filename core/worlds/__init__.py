@@ -130,6 +130,8 @@ class World:
     integrator: str = "implicitfast"
     arena: Mapping[str, str] = field(default_factory=dict)  # builder-specific: scene file, floor and wall styles
     table: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # a table arena's (size, top centre)
+    # the table's sliding, torsional and rolling friction: LIBERO's BDDL table arena sets 0.6; its kitchen table keeps 1
+    table_friction: tuple[float, float, float] = (0.6, 0.005, 0.0001)
     fixtures: tuple[Placed, ...] = ()  # furniture in every scene of the world, never moved
     suite: str = ""  # the LIBERO benchmark suite whose BDDL problems lay the world's scenes out
     robot_faces: int = 2000  # the robot's visual meshes are decimated to this many triangles each (oracle/meshes.py)
