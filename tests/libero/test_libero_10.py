@@ -20,6 +20,9 @@ SCENES = {
     "libero_10_kitchen_scene3": ("KITCHEN_SCENE3_turn_on_the_stove_and_put_the_moka_pot_on_it",
                                  (("chefmate_8_frypan", 1), ("moka_pot", 1))),
     "libero_10_kitchen_scene8": ("KITCHEN_SCENE8_put_both_moka_pots_on_the_stove", (("moka_pot", 2),)),
+    "libero_10_living_room": ("LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket",
+                              tuple((k, 1) for k in ("alphabet_soup", "cream_cheese", "tomato_sauce", "ketchup", "orange_juice",
+                                                     "milk", "butter", "basket"))),
 }  # fmt: skip
 
 
@@ -28,10 +31,11 @@ SCENES = {
 def test_the_compiled_physics_is_liberos(world: str, tmp_path: Path) -> None:
     """Every body, joint, colliding geom, actuator and camera of the scene's LIBERO-10 task has its
     twin in ours, with the same values: the kitchen's table (its friction robosuite's 1, not the
-    tabletop's 0.6), the mounted Panda, the stove, the moka pots and the frying pan."""
+    tabletop's 0.6) and mounted Panda, the living room's table and Panda on the floor, the stove,
+    the moka pots, the frying pan, the groceries and the basket."""
     task, assets = SCENES[world]
     assert task in libero.tasks(SUITE)
     theirs = dict(np.load(liberos_own("model", {"suite": SUITE, "task": task}, tmp_path / "model.npz")))
     ours = model_arrays(scene_for(assets, "libero", world).model)
-    compared = same_physics(theirs, ours, (f for f in libero.problem(SUITE, task).fixtures if f != "kitchen_table"))
-    assert any(":moka_pot_1" in k for k in compared) and any(k.startswith("geom_friction") for k in compared)
+    compared = same_physics(theirs, ours, (f for f in libero.problem(SUITE, task).fixtures if not f.endswith("_table")))
+    assert all(any(f":{kind}_1" in k for k in compared) for kind, _ in assets) and any("friction" in k for k in compared)
