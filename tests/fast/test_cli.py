@@ -42,7 +42,10 @@ def _untouched(out: Path) -> bool:
         (["codec=mpeg2"], "codec must be one of"),
         (["profile=openvla"], "unknown profile 'openvla'; known: native, libero"),
         (["n"], "key=value"),
-        (["world=mars"], "unknown world 'mars'; known: native, libero_10_kitchen_scene3, libero_10_kitchen_scene8, libero_10_living_room"),
+        (
+            ["world=mars"],
+            "unknown world 'mars'; known: native, libero_10_kitchen_scene3, libero_10_kitchen_scene8, libero_10_living_room",
+        ),
         (["n=2", "n=3"], "option 'n' is given twice (n=2 and n=3); give it once"),
         (["objects_per_scene=1"], "objects_per_scene must be at least 2 (a swap needs another object), got 1"),
         (["holdout=[milk carton,soda can,bottle,bread,cereal box,lemon]"], "holdout: holds out every object"),
