@@ -23,6 +23,8 @@ SCENES = {
     "libero_10_living_room": ("LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket",
                               tuple((k, 1) for k in ("alphabet_soup", "cream_cheese", "tomato_sauce", "ketchup", "orange_juice",
                                                      "milk", "butter", "basket"))),
+    "libero_10_study": ("STUDY_SCENE1_pick_up_the_book_and_place_it_in_the_back_compartment_of_the_caddy",
+                        (("black_book", 1), ("white_yellow_mug", 1))),
 }  # fmt: skip
 
 
