@@ -261,7 +261,10 @@ FIXTURES: dict[str, Fixture] = {
         Fixture("wooden_cabinet", "articulated_objects/wooden_cabinet.xml", ("top_level", "middle_level", "bottom_level")),
         Fixture("flat_stove", "articulated_objects/flat_stove.xml", ("button",), mirror="base_vis"),
         Fixture("wine_rack", "turbosquid_objects/wine_rack/wine_rack.xml"),
-        Fixture("desk_caddy", "turbosquid_objects/desk_caddy/desk_caddy.xml"),  # LIBERO-10's study: four compartments
+        # LIBERO-10's: the wooden cabinet in white, the microwave (its door's hinge), the study's desk caddy
+        Fixture("white_cabinet", "articulated_objects/white_cabinet.xml", ("top_level", "middle_level", "bottom_level")),
+        Fixture("microwave", "articulated_objects/microwave.xml", ("microjoint",)),
+        Fixture("desk_caddy", "turbosquid_objects/desk_caddy/desk_caddy.xml"),
     )
 }
 

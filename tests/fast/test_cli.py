@@ -44,7 +44,7 @@ def _untouched(out: Path) -> bool:
         (["n"], "key=value"),
         (
             ["world=mars"],
-            "unknown world 'mars'; known: native, libero_10_kitchen_scene3, libero_10_kitchen_scene8, libero_10_living_room",
+            "unknown world 'mars'; known: native, libero_10_kitchen_scene3, libero_10_kitchen_scene4, libero_10_kitchen_scene6",
         ),
         (["n=2", "n=3"], "option 'n' is given twice (n=2 and n=3); give it once"),
         (["objects_per_scene=1"], "objects_per_scene must be at least 2 (a swap needs another object), got 1"),

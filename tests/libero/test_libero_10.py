@@ -1,6 +1,7 @@
 """LIBERO-10's scenes against LIBERO's own environment (`.venv-libero`, driven by
 eval/sims/libero_env/reference.py), scene by scene as their worlds come (issue 53): the same
-physics model, fixtures aside (LIBERO draws their poses anew at each reset)."""
+physics model, the fixtures where LIBERO stands them (within the 1 cm its placement draws anew at
+each reset)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core import libero
+from core import libero, worlds
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
 from helpers import liberos_own, same_physics
 from oracle.scene import scene_for
@@ -19,6 +20,10 @@ SUITE = "libero_10"
 SCENES = {
     "libero_10_kitchen_scene3": ("KITCHEN_SCENE3_turn_on_the_stove_and_put_the_moka_pot_on_it",
                                  (("chefmate_8_frypan", 1), ("moka_pot", 1))),
+    "libero_10_kitchen_scene4": ("KITCHEN_SCENE4_put_the_black_bowl_in_the_bottom_drawer_of_the_cabinet_and_close_it",
+                                 (("akita_black_bowl", 1), ("wine_bottle", 1))),
+    "libero_10_kitchen_scene6": ("KITCHEN_SCENE6_put_the_yellow_and_white_mug_in_the_microwave_and_close_it",
+                                 (("porcelain_mug", 1), ("white_yellow_mug", 1))),
     "libero_10_kitchen_scene8": ("KITCHEN_SCENE8_put_both_moka_pots_on_the_stove", (("moka_pot", 2),)),
     "libero_10_living_room": ("LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket",
                               tuple((k, 1) for k in ("alphabet_soup", "cream_cheese", "tomato_sauce", "ketchup", "orange_juice",
@@ -41,3 +46,7 @@ def test_the_compiled_physics_is_liberos(world: str, tmp_path: Path) -> None:
     ours = model_arrays(scene_for(assets, "libero", world).model)
     compared = same_physics(theirs, ours, (f for f in libero.problem(SUITE, task).fixtures if not f.endswith("_table")))
     assert all(any(f":{kind}_1" in k for k in compared) for kind, _ in assets) and any("friction" in k for k in compared)
+    for fixture in worlds.world(world).fixtures:  # at its region's centre: LIBERO draws it within 1 cm of it, turned as ours
+        body = f"{fixture.name}_main"
+        assert np.abs(theirs[f"body_pos:{body}"] - ours[f"body_pos:{body}"]).max() < 0.015, body
+        assert np.allclose(theirs[f"body_quat:{body}"], ours[f"body_quat:{body}"], atol=1e-6), body
