@@ -55,7 +55,8 @@ HULL_WEIGHT = 1e3  # _hull_distance's weight on its weights summing to 1 (distan
 HIDDEN_GROUP = 5  # geoms of parked bodies move to this group, which no camera draws (oracle/render.py)
 MIRROR_GROUP = 4  # a fixture's mirror plate: drawn by the agentview camera alone (oracle/render.py)
 # How LIBERO's mirror tops look from its agentview camera: the light plaster wall behind the robot,
-# reflected (fitted to LIBERO's frames: the stove top from 75/255 to 16/255 mean absolute difference).
+# reflected (fitted to LIBERO's frames: the stove top from 75/255 to 16/255 mean absolute difference);
+# a world whose walls differ says its own (`arena`'s "mirror_rgba" and "mirror_emission").
 MIRROR_LOOK = {"rgba": "0.8 0.8 0.8 1", "emission": "0.3"}
 
 
@@ -135,7 +136,8 @@ def _mirror_plates(root: ET.Element, world: worlds.World) -> None:
     names = {f"{p.name}_{p.fixture.mirror}" for p in world.fixtures if p.fixture.mirror}
     if not names:
         return
-    ET.SubElement(root.find("asset"), "material", {"name": "mirror_top", **MIRROR_LOOK})
+    look = {key: world.arena.get(f"mirror_{key}", value) for key, value in MIRROR_LOOK.items()}
+    ET.SubElement(root.find("asset"), "material", {"name": "mirror_top", **look})
     for body in root.iter("body"):
         for geom in body.findall("geom"):
             if geom.get("name") in names:

@@ -8,6 +8,7 @@ import os
 import shutil
 import subprocess
 import sys
+from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -16,7 +17,7 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from core import libero, programs
+from core import libero, programs, worlds
 from core.exam import FACES, Exam, read
 from core.profiles import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, Setup
@@ -25,7 +26,7 @@ from eval.sims.libero import in_liberos
 from eval.sims.libero_env.reference import named, object_differences  # the same readout in the tests and the pictures in docs/
 from gen.config import parse
 from gen.planning.plan import world_setup
-from gen.products.canonical import CanonicalOptions, Suite, load_state, suite_of
+from gen.products.canonical import CanonicalOptions, load_state, suite_of
 from gen.products.run import generate
 from jobs.lock import held
 from oracle.render import Cameras
@@ -91,13 +92,14 @@ class Pictures:
         assert excess <= 0, f"{name} in {camera} at {where}: {figure:.1f}/255 inside its pixels, {excess:.1f} over its bound"
 
 
-def _load_by_name(scene: Scene, suite: Suite, task: str, state: int, setup: Setup) -> list[str]:
+def _load_by_name(
+    scene: Scene, suite: str, problem: libero.Problem, state: int, setup: Setup, inventory: tuple[tuple[str, int], ...]
+) -> list[str]:
     """Our scene in a LIBERO task's initial state with no design of it: each object under its LIBERO
     instance name, every joint set by name from LIBERO's state vector; returns the objects' ids."""
-    problem = suite.problem(task)
     objects = tuple(SceneObject(instance, kind, kind, 0, (0.0, 0.0, 1.0)) for instance, kind in problem.objects.items())
-    scene.reset(EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), suite.inventory(), setup=setup))
-    scene.set_joints(*libero.split_state(libero.initial_states(suite.name, task)[state], problem))
+    scene.reset(EpisodeSpec("", 0, 0, objects, objects[0].id, "", "", (), inventory, setup=setup))
+    scene.set_joints(*libero.split_state(libero.initial_states(suite, problem.name)[state], problem))
     return [o.id for o in objects]
 
 
@@ -105,24 +107,39 @@ _LIBEROS_RENDERS: dict[str, Path] = {}  # request -> LIBERO's frames of it: each
 
 
 def initial_state_pictures(
-    suite: str, cases: list[tuple[int, int]], tmp_path: Path, look: str = FAST, joints: dict[str, float] | None = None
+    suite: str,
+    cases: list[tuple[int, int]],
+    tmp_path: Path,
+    look: str = FAST,
+    joints: dict[str, float] | None = None,
+    world: str | None = None,
 ) -> tuple[Pictures, float]:
     """Our frames, drawn with `look`, against LIBERO's own render at LIBERO's initial states of a
     suite (LIBERO's or LIBERO-PRO's): `cases` are (task number in the suite's order, state); the
-    fixtures posed as LIBERO drew them for each, their `joints` (name -> value) set in both. Returns
-    the pictures' figures and the farthest any object stands from where LIBERO puts it (m)."""
-    chosen = suite_of(CanonicalOptions(suite=suite))
+    fixtures posed as LIBERO drew them for each, their `joints` (name -> value) set in both. With a
+    `world`, the scenes are that world's and every task's objects are loaded by name (a suite whose
+    canonical exam is not ours yet: LIBERO-10's scenes). Returns the pictures' figures and the
+    farthest any object stands from where LIBERO puts it (m)."""
+    chosen = None if world else suite_of(CanonicalOptions(suite=suite))
     names = list(libero.tasks(suite))
+    problem = chosen.problem if chosen else (lambda task: libero.problem(suite, task))
+    if chosen:
+        the_world, inventory = chosen.world, chosen.inventory()
+    else:
+        most: Counter[str] = Counter()
+        for t, _ in cases:  # every kind the tasks place, as many as any task places
+            most |= Counter(problem(names[t]).objects.values())
+        the_world, inventory = worlds.world(world), tuple(sorted(most.items()))
     request = {"suite": suite, "size": LIBERO.image_size, "cases": [list(c) for c in cases], "tasks": names}
     request |= {"joints": joints} if joints else {}
     key = json.dumps(request, sort_keys=True)
     if key not in _LIBEROS_RENDERS:
         _LIBEROS_RENDERS[key] = liberos_own("render", request, tmp_path / f"{suite}.npz")
     theirs = np.load(_LIBEROS_RENDERS[key], allow_pickle=True)
-    setup = world_setup(chosen.world, look=look)
-    scene = scene_for(chosen.inventory(), setup.profile, chosen.world.name, look)
+    setup = world_setup(the_world, look=look)
+    scene = scene_for(inventory, setup.profile, the_world.name, look)
     cameras, m = Cameras(scene, LIBERO.image_size, LIBERO.camera_names), scene.model
-    kept = {f.name: (m.body(f"{f.name}_main").id,) for f in chosen.world.fixtures}
+    kept = {f.name: (m.body(f"{f.name}_main").id,) for f in the_world.fixtures}
     kept = {name: (b, m.body_pos[b].copy(), m.body_quat[b].copy()) for name, (b,) in kept.items()}
     pictures, farthest = Pictures(), 0.0
     try:
@@ -130,14 +147,14 @@ def initial_state_pictures(
             for name, *pose in theirs[f"{t}-{s}-fixtures"].tolist():  # LIBERO draws its fixtures anew at each reset
                 body = m.body(f"{name}_main").id
                 m.body_pos[body], m.body_quat[body] = pose[:3], pose[3:]
-            if names[t] in chosen.tasks:
+            if chosen and names[t] in chosen.tasks:
                 ids = [o.id for o in load_state(scene, chosen, names[t], s, setup).objects]
-            else:  # a task our skills cannot do (LIBERO-Goal's wine bottle's): its objects under LIBERO's names
-                ids = _load_by_name(scene, chosen, names[t], s, setup)
+            else:  # a task our skills cannot do (LIBERO-Goal's wine bottle's), or of no exam yet: objects by LIBERO's names
+                ids = _load_by_name(scene, suite, problem(names[t]), s, setup, inventory)
             if joints:
                 scene.set_joints({j: np.array([v]) for j, v in joints.items()}, {j: np.zeros(1) for j in joints})
             pictures.compare(cameras, theirs, f"{t}-{s}", f"{suite} task {t} state {s}")
-            ours = {instance: scene.object_pos(i) for i, instance in zip(ids, chosen.problem(names[t]).objects)}
+            ours = {instance: scene.object_pos(i) for i, instance in zip(ids, problem(names[t]).objects)}
             for instance, *pos in theirs[f"{t}-{s}-objects"]:
                 farthest = max(farthest, float(np.abs(ours[instance] - np.asarray(pos, float)).max()))
     finally:

@@ -23,8 +23,13 @@ KITCHEN = replace(
         "scene": "scenes/libero_kitchen_tabletop_base_style.xml",
         "floor": "gray_ceramic_tile.png",  # floor_style="gray-ceramic"
         "wall": "yellow_linen_wall_texture.png",  # wall_style="yellow-linen"
+        # the flat stove's mirror top shows the kitchen's dark units behind the robot, not the tabletop's
+        # light wall (oracle/scene.py MIRROR_LOOK): fitted to LIBERO's frames, as that was
+        "mirror_rgba": "0.33 0.32 0.3 1",
+        "mirror_emission": "0.1",
     },
     table_friction=(1.0, 0.005, 0.0001),  # KitchenTableArena's default, which LIBERO's kitchen problem keeps
+    robot_faces=2000,
     fixtures=(),
     suite="",
     episode_steps=520,  # lerobot's envs/libero.py: libero_10's max_episode_steps (its longest demonstration: 505)

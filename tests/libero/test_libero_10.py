@@ -1,7 +1,7 @@
 """LIBERO-10's scenes against LIBERO's own environment (`.venv-libero`, driven by
 eval/sims/libero_env/reference.py), scene by scene as their worlds come (issue 53): the same
 physics model, the fixtures where LIBERO stands them (within the 1 cm its placement draws anew at
-each reset)."""
+each reset), and the same pictures at LIBERO-10's own initial states."""
 
 from __future__ import annotations
 
@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from core import libero, worlds
+from core.spec import FAST, LOOKS
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
-from helpers import liberos_own, same_physics
+from helpers import PICTURE_STATES, initial_state_pictures, liberos_own, same_physics
 from oracle.scene import scene_for
 
 SUITE = "libero_10"
@@ -50,3 +51,49 @@ def test_the_compiled_physics_is_liberos(world: str, tmp_path: Path) -> None:
         body = f"{fixture.name}_main"
         assert np.abs(theirs[f"body_pos:{body}"] - ours[f"body_pos:{body}"]).max() < 0.015, body
         assert np.allclose(theirs[f"body_quat:{body}"], ours[f"body_quat:{body}"], atol=1e-6), body
+
+
+# the scene each world stands for, by the prefix of its tasks' names (the living room: four scenes)
+PREFIXES = {
+    "libero_10_kitchen_scene3": ("KITCHEN_SCENE3_",),
+    "libero_10_kitchen_scene4": ("KITCHEN_SCENE4_",),
+    "libero_10_kitchen_scene6": ("KITCHEN_SCENE6_",),
+    "libero_10_kitchen_scene8": ("KITCHEN_SCENE8_",),
+    "libero_10_living_room": ("LIVING_ROOM_SCENE",),
+    "libero_10_study": ("STUDY_SCENE1_",),
+}
+
+
+# Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND: the stove's mirror
+# top (22-29/255 agentview, its plate fitted in the kitchen too), the woven basket (24, as LIBERO-PRO's
+# tests measure it) and the white mug's decimated mesh near the wrist camera (18). The full look draws
+# every thing within it.
+OWN_BOUNDS = {"flat_stove": 30.0, "basket": 28.0, "porcelain_mug": 19.0}
+# Whole frames the fast look leaves over helpers.FRAME_BOUND (no shadows, no reflections): the living
+# room's low camera sees the robot and the wall it shades (5.2/255; the full look 1.6), the second
+# kitchen stove's mirror (4.15). Expected to fail until the fast look draws them.
+FAST_SHORT = {"libero_10_living_room": "5.2/255 in the fast look", "libero_10_kitchen_scene8": "4.15/255 in the fast look"}
+
+
+def _looks() -> list:
+    return [
+        pytest.param(world, look, marks=pytest.mark.xfail(strict=True, reason=FAST_SHORT[world]))
+        if look == FAST and world in FAST_SHORT
+        else (world, look)
+        for world in PREFIXES
+        for look in LOOKS
+    ]
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize(("world", "look"), _looks())
+def test_the_same_pictures_at_liberos_own_initial_states(world: str, look: str, tmp_path: Path) -> None:
+    """The first initial states (PICTURE_STATES) of each of the world's LIBERO-10 tasks, its objects
+    loaded by their LIBERO names and the fixtures posed as LIBERO drew them: both cameras within
+    helpers.FRAME_BOUND, every object and fixture within helpers.OBJECT_BOUND inside its own pixels
+    (in the fast look, OWN_BOUNDS excepted), every object within 1 mm of where LIBERO puts it."""
+    tasks = [i for i, name in enumerate(libero.tasks(SUITE)) if name.startswith(PREFIXES[world])]
+    cases = [(t, s) for t in tasks for s in range(PICTURE_STATES)]
+    pictures, farthest = initial_state_pictures(SUITE, cases, tmp_path, look, world=world)
+    pictures.check(OWN_BOUNDS if look == FAST else None)
+    assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
