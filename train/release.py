@@ -27,6 +27,11 @@ Stages, each done once and reused (train/stages.py), so the run spans as many si
   cool-down redone from where it began (its `stable.pt`), the batches drawing the favoured axes'
   types `favour_share` of the time, and that checkpoint's takes of those axes in both simulators.
 
+A run outlives its machine: on a new one, the committed results of the same out= and options are
+carried (a take is not redone while the weights, or a reference policy's exam, it was taken with
+are the same) and each arm's committed checkpoint restored with its log (its data then not
+regenerated); `sims=[libero]` takes only LIBERO's simulator's exams.
+
 Results (from the finished reports, whichever process finishes last): docs/RESULTS_LIBERO_AXES.md,
 docs/results_libero_axes.json (rows: axis, arm, sim, faces) and docs/libero_axes.png; the
 checkpoints in docs/checkpoints/libero-release-lora and docs/checkpoints/libero-release-confounded-lora.
@@ -36,8 +41,9 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from core.exam import Exam, read
 from gen.config import GenConfig
@@ -45,6 +51,7 @@ from gen.planning import mix
 from jobs.cli import UserError, main
 from referents import registry
 from train.stages import (
+    WEIGHTS_DIGEST,
     Commands,
     Ledger,
     begun_with,
@@ -55,11 +62,17 @@ from train.stages import (
     finished_report,
     gen_command,
     generate_once,
+    recipe,
     reference_report,
+    restore,
+    train_log,
     train_once,
     value,
     weights_digest,
 )
+
+if TYPE_CHECKING:
+    from train.fit import TrainConfig
 
 # axis -> (the mix's item: the type in its LIBERO scene, the confounded arm's confound)
 AXES: dict[str, tuple[str, str]] = {
@@ -102,6 +115,7 @@ class ReleaseOptions:
     workers: int = 2  # generation and exam processes
     threads: int = 2  # training threads (1 each when the arms train side by side)
     libero: list[str] = field(default_factory=lambda: list(ARMS))  # arms whose exams LIBERO's simulator takes too
+    sims: list[str] = field(default_factory=lambda: list(SIMS))  # the simulators this process takes exams in
     favour: list[str] = field(default_factory=list)  # axes that fell short: the deconfounded cool-down redone favouring them
     favour_share: float = 3 / 7  # the favoured axes' share of each batch in that cool-down (balanced, each has 1/7)
     canonical: bool = True  # the deconfounded checkpoint on LIBERO's canonical exams in LIBERO's simulator
@@ -112,7 +126,7 @@ class ReleaseOptions:
 
 
 def _check(options: ReleaseOptions) -> None:
-    for name, allowed in (("arms", ARMS), ("axes", tuple(AXES)), ("libero", ARMS)):
+    for name, allowed in (("arms", ARMS), ("axes", tuple(AXES)), ("libero", ARMS), ("sims", SIMS)):
         chosen = getattr(options, name)
         if any(c not in allowed for c in chosen) or len(set(chosen)) != len(chosen) or (name == "axes" and not chosen):
             raise UserError(f"{name} must be some of {', '.join(allowed)}, each once; got {chosen}")
@@ -169,8 +183,22 @@ def _canonical(options: ReleaseOptions, ledger: Ledger, commands: Commands) -> d
 
 
 def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: Commands) -> dict | None:
-    """Train (or continue, or reuse) the arm's LoRA; its log. The favoured arm branches from the
-    deconfounded arm's state where its cool-down began, on the same data."""
+    """Train (or continue, or reuse) the arm's LoRA; its log."""
+    cfg, line = _train_config(options, arm)
+    commands.append(line)
+    return train_once(cfg, ledger, f"train {arm}")
+
+
+def _trained(options: ReleaseOptions, arm: str) -> bool:
+    """Whether the arm's training is finished on this recipe (its data is then not needed)."""
+    cfg, _ = _train_config(options, arm)
+    log = train_log(Path(cfg.out))
+    return log is not None and recipe(log["config"]) == recipe(asdict(cfg))
+
+
+def _train_config(options: ReleaseOptions, arm: str) -> tuple[TrainConfig, str]:
+    """The arm's training run and its command line. The favoured arm branches from the deconfounded
+    arm's state where its cool-down began, on the same data."""
     from train.fit import STABLE, LoraOptions, TrainConfig
 
     root = Path(options.out)
@@ -193,12 +221,12 @@ def _train(options: ReleaseOptions, arm: str, ledger: Ledger, commands: Commands
         resume=True,
     )
     fix = f" favour=[{','.join(cfg.favour)}] favour_share={cfg.favour_share:.4g} branch={cfg.branch}" if favoured else ""
-    commands.append(
+    line = (
         f"python -m train dataset={cfg.dataset} policy=tiny lora.rank=16 steps={steps} decay={cfg.decay} "
         f"lr_floor={cfg.lr_floor} point_weight={cfg.point_weight} balance={str(cfg.balance).lower()}{fix} "
         f"threads={cfg.threads} seed={cfg.seed} out={cfg.out}"
     )
-    return train_once(cfg, ledger, f"train {arm}")
+    return cfg, line
 
 
 def recorded(axis: str) -> str:
@@ -219,36 +247,45 @@ def run(options: ReleaseOptions) -> None:
 
     root = Path(options.out)
     ledger, commands = Ledger(root), Commands(root)
+    carried = _carried(options)
+    if carried:  # the committed checkpoints of these results: their training outlives the machine
+        for arm in options.arms:
+            restore(root / "ckpt" / arm, Path(options.docs) / "checkpoints" / COMMITTED[arm])
     exams: dict[str, tuple[Exam, Path]] = {}
     for name, (line, cfg) in stages.items():
         commands.append(line)
+        kind, what = name.split()
+        if kind == "data" and _trained(options, what) and not (what == "deconfounded" and options.favour):
+            continue  # trained on it already (here or restored): the dataset is needed again only to retrain
         generate_once(cfg, ledger, f"generate {name}")
-        if name.startswith("exam"):
-            exams[name.split()[1]] = (read(str(cfg.out)), Path(str(cfg.out)))
+        if kind == "exam":
+            exams[what] = (read(str(cfg.out)), Path(str(cfg.out)))
     canonical = _canonical(options, ledger, commands) if options.canonical and "deconfounded" in options.arms else {}
     for axis, (exam, folder) in exams.items():
         type_, world = mix.split(AXES[axis][0])
-        if registry.load(type_, world=world).code.named_place is not None:
+        if registry.load(type_, world=world).code.named_place is not None and "ours" in options.sims:
             out = root / "reports" / "named_place" / axis
             commands.append(f"python -m eval policy=named_place exam={folder} workers=2 out={out}")
-            reference_report(exam, "named_place", out, ledger, f"named_place {axis}")
+            if not _is_carried(carried, (axis, "axis", "named_place", "ours"), _reference_digest(exam)):
+                reference_report(exam, "named_place", out, ledger, f"named_place {axis}")
     trained = {}
     for arm in options.arms:
         _train(options, arm, ledger, commands)
         trained[arm] = root / "ckpt" / arm
         commit(trained[arm] / MODEL_FILE, Path(options.docs) / "checkpoints" / COMMITTED[arm], options.commit_mb)
-        _takes(options, arm, trained[arm], exams, "ours", ledger, commands)
+        _takes(options, arm, trained[arm], exams, "ours", ledger, commands, carried)
     if options.favour:
         _train(options, FAVOURED, ledger, commands)
         trained[FAVOURED] = root / "ckpt" / FAVOURED
-        _takes(options, FAVOURED, trained[FAVOURED], {a: exams[a] for a in options.favour}, "ours", ledger, commands)
+        chosen = {a: exams[a] for a in options.favour}
+        _takes(options, FAVOURED, trained[FAVOURED], chosen, "ours", ledger, commands, carried)
     for arm, weights in trained.items():
         if arm in options.libero or arm == FAVOURED:
             chosen = {a: exams[a] for a in options.favour} if arm == FAVOURED else exams
-            _takes(options, arm, weights, chosen, "libero", ledger, commands)
+            _takes(options, arm, weights, chosen, "libero", ledger, commands, carried)
     if "deconfounded" in trained:
         named = {f"canonical-{world}": made for world, made in canonical.items()}
-        _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, baseline=False)
+        _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, carried, False)
 
 
 def _takes(
@@ -259,16 +296,56 @@ def _takes(
     sim: str,
     ledger: Ledger,
     commands: Commands,
+    carried: list[dict],
     baseline: bool = True,
 ) -> None:
-    """The checkpoint's take of each exam in `sim` (ours: with the `position` shortcut's faces)."""
+    """The checkpoint's take of each exam in `sim` (ours: with the `position` shortcut's faces),
+    unless these weights' take of it is among the committed results."""
+    if sim not in options.sims:
+        return
+    digest = weights_digest(weights)
     for name, (exam, folder) in exams.items():
         out = _report_dir(Path(options.out), arm, name, sim)
         commands.append(
             f"python -m eval policy=ckpt:{weights} exam={folder} replan={options.replan} workers=2 sim={sim} out={out}"
         )
+        if _is_carried(carried, (*_row_key(name), arm, sim), digest):
+            continue
         stage = f"eval {arm} {name} {sim}"
         exam_report(exam, weights, exam.trials, out, options.replan, ledger, stage, baseline and sim == "ours", sim)
+
+
+def _row_key(name: str) -> tuple[str, str]:
+    """A take's exam folder name as its row's (axis, exam)."""
+    return (name, "axis") if name in AXES else (name.removeprefix("canonical-"), "canonical")
+
+
+def _carried(options: ReleaseOptions) -> dict:
+    """The rows of the committed results (docs/results_libero_axes.json) when they are this run's
+    (the same out= begun with the same options): a take outlives the machine that took it, and
+    is kept while the weights (or, of a reference policy, the exam) it was taken with are the same."""
+    path = Path(options.docs) / JSON
+    try:
+        committed = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    same = committed.get("out") == options.out and committed.get("settings") == {k: getattr(options, k) for k in DETERMINING}
+    return committed if same else {}
+
+
+def _is_carried(carried: dict, key: tuple[str, str, str, str], digest: str | None) -> bool:
+    return any(_key(r) == key and r.get("weights") == digest for r in carried.get("rows", []))
+
+
+def _key(row: dict) -> tuple[str, str, str, str]:
+    return row["axis"], row["exam"], row["arm"], row["sim"]
+
+
+def _reference_digest(exam: Exam) -> str:
+    """What a reference policy's report is stamped with: its exam (train/stages.py `reference_report`)."""
+    from eval.scoring.baseline import exam_digest
+
+    return exam_digest(exam, "named_place")
 
 
 def collect(options: ReleaseOptions) -> dict:
@@ -278,7 +355,7 @@ def collect(options: ReleaseOptions) -> dict:
     from train.stages import train_log
 
     root = Path(options.out)
-    rows, not_run, training = [], [], {}
+    rows, not_run, training, digests = [], [], {}, {}
     for arm in (*ARMS, FAVOURED):
         weights = root / "ckpt" / arm
         log = train_log(weights)
@@ -296,23 +373,33 @@ def collect(options: ReleaseOptions) -> dict:
             cfg = log["config"]
             favoured = [a for a in AXES if recorded(a) in cfg["favour"]]
             training[arm] |= {"favour": favoured, "favour_share": cfg["favour_share"], "branch": cfg["branch"]}
-        digest = weights_digest(weights)
+        digest = digests[arm] = weights_digest(weights)
         for name in [*AXES, *(f"canonical-{w}" for w in CANONICAL)]:
             for sim in SIMS:
                 report = finished_report(_report_dir(root, arm, name, sim), digest)
                 if report is None:
                     continue
-                axis, exam = (name, "axis") if name in AXES else (name.removeprefix("canonical-"), "canonical")
+                axis, exam = _row_key(name)
                 rows.append({
-                    "axis": axis, "exam": exam, "arm": arm, "sim": sim, "faces": report["faces"],
+                    "axis": axis, "exam": exam, "arm": arm, "sim": sim, "weights": digest, "faces": report["faces"],
                     "position": (report.get("baseline") or None), "rollouts": report.get("rollouts"),
                     "reach_probe": report.get("reach_probe"), "per_object": report.get("per_object"),
                     "simulator_versions": report.get("simulator_versions"),
                 })  # fmt: skip
     for axis in AXES:
-        report = finished_report(root / "reports" / "named_place" / axis, None)
-        if report is not None:
-            rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "faces": report["faces"]})
+        folder = root / "reports" / "named_place" / axis
+        if (report := finished_report(folder, None)) is not None:
+            stamp = (folder / WEIGHTS_DIGEST).read_text()
+            rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "weights": stamp,
+                         "faces": report["faces"]})  # fmt: skip
+        if (exam := root / "exams" / axis / "exam.json").is_file():
+            digests[f"named_place {axis}"] = _reference_digest(read(str(exam.parent)))
+    carried = _carried(options)
+    taken = {_key(r) for r in rows}
+    for r in carried.get("rows", []):
+        arm = r["arm"] if r["arm"] != "named_place" else f"named_place {r['axis']}"
+        if _key(r) not in taken and r.get("weights") is not None and r.get("weights") == digests.get(arm):
+            rows.append(r)
     return {
         "out": options.out,
         "libero_arms": options.libero,
@@ -320,8 +407,8 @@ def collect(options: ReleaseOptions) -> dict:
         "rows": rows,
         "training": training,
         "not_run": not_run,
-        "commands": Commands(root).read(),
-        "timings_s": Ledger(root).spent,
+        "commands": list(dict.fromkeys([*carried.get("commands", []), *Commands(root).read()])),
+        "timings_s": carried.get("timings_s", {}) | Ledger(root).spent,
     }
 
 

@@ -205,6 +205,28 @@ def train_log(ckpt: Path) -> dict | None:
         return None
 
 
+def restore(ckpt: Path, committed: Path) -> dict | None:
+    """The log of a finished run rebuilt from its committed checkpoint when `ckpt` holds none: the
+    final weights carry the config and loss history they were trained with (train/fit.py), so a
+    run outlives the machine that trained it. None when there is nothing to restore."""
+    import torch
+
+    from train.policy import MODEL_FILE
+
+    if (log := train_log(ckpt)) is not None or not (committed / MODEL_FILE).is_file():
+        return log
+    record = torch.load(committed / MODEL_FILE, map_location="cpu", weights_only=False)
+    if "history" not in record or not record["history"]:
+        return None
+    ckpt.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(committed / MODEL_FILE, ckpt / MODEL_FILE)
+    history = record["history"]
+    log = {"steps": history[-1]["step"], "final_loss": history[-1]["loss"], "config": record["train"],
+           "history": history, "restored_from": str(committed)}  # fmt: skip
+    (ckpt / "train.json").write_text(json.dumps(log, indent=2))
+    return log
+
+
 def recipe(config: dict) -> tuple:
     """What decides a run's weights besides its data and seed: the learning rate at every step, and
     the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none), and

@@ -1,11 +1,13 @@
 """The release command (`python -m train.release`) end to end at its smallest: the confounded arm's
 mix (each type confounded its own way), the exams, a LoRA, the takes with the shortcuts beside them,
-and the docs written from the reports; a second run reuses every stage. The full-size run is the
+and the docs written from the reports; a second run reuses every stage, and so does a run on a new
+machine from what was committed. The full-size run is the
 command docs/RESULTS_LIBERO_AXES.md lists."""
 
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -49,6 +51,14 @@ def test_the_confounded_arm_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     other = _release("arms=[confounded]", "lr_floor=0.5", "train=false", f"out={out}", f"docs={docs}")
     assert other.returncode == 2 and "begun with lr_floor=0.05, not 0.5" in other.stderr, other.stderr
     assert (docs / "RESULTS_LIBERO_AXES.md").read_text() == text
+    shutil.rmtree(out)  # a new machine: only what was committed (the docs, the checkpoint) is left
+    lost = _release("arms=[confounded]", f"out={out}", f"docs={docs}")
+    assert lost.returncode == 0, lost.stderr[-3000:]
+    redone = json.loads((out / "timings.json").read_text())
+    assert not (out / "data" / "confounded").exists() and not any(s.startswith(("train", "eval", "named")) for s in redone)
+    carried = json.loads((docs / "results_libero_axes.json").read_text())
+    assert carried["rows"] == results["rows"] and carried["training"] == results["training"], redone
+    assert carried["timings_s"]["train confounded"] == spent["train confounded"]
 
 
 @pytest.mark.parametrize("train", ["true", "false"])
