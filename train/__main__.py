@@ -26,6 +26,8 @@ def validate(cfg: TrainConfig) -> None:
         raise UserError(f"lr_floor is a fraction of the peak learning rate, between 0 and 1; got {cfg.lr_floor}")
     if cfg.favour and (not cfg.balance or not 0 < cfg.favour_share < 1):
         raise UserError(f"favour needs balance=true and favour_share in (0, 1), got {cfg.balance}, {cfg.favour_share}")
+    if not 0 <= cfg.switched_share < 1:
+        raise UserError(f"switched_share is a share of each batch, in [0, 1); got {cfg.switched_share}")
     if cfg.branch and not Path(cfg.branch).is_file():
         raise UserError(f"branch={cfg.branch} is no training state (a run's stable.pt or last.pt)")
     if cfg.lora.rank < 1:

@@ -239,6 +239,22 @@ def favoured(frames: Frames, group: np.ndarray, types: list[str], share: float) 
     return np.where(chosen, share / chosen.sum(), (1 - share) / (~chosen).sum())
 
 
+def after_switch(
+    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The balance groups (`groups`, or all frames one) with the switched episodes' frames from their
+    switch on split off into a group of their own that takes `share` of every batch, the groups'
+    chances (equal, or `favoured`) scaled to the rest: as they fall, those frames are too few (45
+    switched episodes of 300, their second halves) to outweigh the path under way."""
+    later = frames.aim != frames.episode if frames.aim is not None else np.zeros(len(frames), bool)
+    if not later.any():
+        raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
+    base = np.zeros(len(frames), np.int64) if group is None else group
+    n = int(base.max()) + 1
+    prior = np.full(n, 1 / n) if chances is None else chances
+    return np.where(later, n, base), np.append(prior * (1 - share), share)
+
+
 def sample(
     frames: Frames,
     rng: np.random.Generator,

@@ -67,6 +67,7 @@ class TrainConfig:
     balance: bool = True  # each batch draws its frames equally from each dataset and each referent type of a mix
     favour: list[str] = field(default_factory=list)  # referent types of a mix that take `favour_share` of each batch
     favour_share: float = 0.5  # with `favour`: their share of each batch together (the other types split the rest)
+    switched_share: float = 0.0  # the share of each batch drawn from switched episodes' frames after the switch (0: as they fall)
     branch: str = ""  # a training state of another run (its stable.pt, last.pt) this run continues from, in `out`
     out: str = "runs/train/tiny"
     policy: str = "tiny"
@@ -223,13 +224,15 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
     draw_from = data.groups(frames) if cfg.balance else None
     chances = data.favoured(frames, draw_from, cfg.favour, cfg.favour_share) if cfg.favour else None
+    if cfg.switched_share:
+        draw_from, chances = data.after_switch(frames, draw_from, chances, cfg.switched_share)
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()
     while step < cfg.steps:
         if cfg.decay and step == decay_start(cfg):  # where a longer run would branch off
             _checkpoint(out / STABLE, model, optimizer, step, history, rng)
-        index = data.sample(frames, rng, cfg.batch_size, cfg.balance, draw_from, chances)
+        index = data.sample(frames, rng, cfg.batch_size, cfg.balance or bool(cfg.switched_share), draw_from, chances)
         targets, mask = data.chunk_indices(frames, index, cfg.chunk)
         shifted = {c: _shift(frames.images[c][index], cfg.shift, rng) for c in model.cameras}
         images = {c: torch.from_numpy(moved) for c, (moved, _) in shifted.items()}

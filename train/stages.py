@@ -229,10 +229,12 @@ def restore(ckpt: Path, committed: Path) -> dict | None:
 
 def recipe(config: dict) -> tuple:
     """What decides a run's weights besides its data and seed: the learning rate at every step, and
-    the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none), and
-    the types a run favours with their share (none before `favour` existed)."""
+    the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none), the
+    types a run favours with their share (none before `favour` existed), and the share of switched
+    frames (none before `switched_share` existed)."""
     favoured = (tuple(config["favour"]), config["favour_share"]) if config.get("favour") else ()
-    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight")) + favoured
+    switched = (("switched", config["switched_share"]),) if config.get("switched_share") else ()
+    return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight")) + favoured + switched
 
 
 def exam_report(

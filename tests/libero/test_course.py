@@ -61,7 +61,7 @@ def test_a_switched_share_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     ("option", "needle"),
     [({"shares": [1.5]}, "shares must be"), ({"docs": "/nowhere"}, "markers"), ({"sims": ["gazebo"]}, "sims must be"),
      ({"exams": ["final"]}, "exams must be"), ({"without": "nowhere"}, "holds no checkpoint"),
-     ({"shares": [], "without": ""}, "nothing to train or take")],
+     ({"shares": [], "without": ""}, "nothing to train or take"), ({"switched_share": 1.0}, "switched_share is a share")],
 )  # fmt: skip
 def test_bad_options_are_refused_before_anything_is_made(option: dict, needle: str, tmp_path: Path) -> None:
     """Each is one line (a UserError: the command line prints it, exit 2) before any folder is made."""

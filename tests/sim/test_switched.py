@@ -2,14 +2,17 @@
 each frame the instruction it was shown and its lerobot-train trains on them, the second
 instruction is achieved, and the set
 regenerates bit for bit from its specs (gen.verify), and training aims each frame at what its
-instruction names (train/data.py `aim`)."""
+instruction names (train/data.py `aim`) and can draw the frames after a switch as often as asked
+(`switched_share`)."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
 from core.spec import EpisodeSpec
@@ -51,3 +54,9 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
         assert np.flatnonzero(moved & own).tolist() == list(range(frames.starts[ep] + then["step"], frames.ends[ep]))
         second = next(o["pos"] for o in json.loads(scene)["objects"] if o["id"] == then["target"])
         np.testing.assert_allclose(frames.target[frames.aim[frames.ends[ep] - 1]], second, atol=1e-6)
+    group, chances = data.after_switch(frames, None, None, 0.8)  # their frames after the switch: 80% of each batch
+    drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
+    assert abs(np.mean(moved[drawn]) - 0.8) < 0.02 and np.mean(moved) < 0.6
+    unswitched = replace(frames, aim=frames.episode)
+    with pytest.raises(data.DatasetError, match="switched_share=0.8 needs switched episodes"):
+        data.after_switch(unswitched, None, None, 0.8)
