@@ -248,15 +248,12 @@ def run(options: ReleaseOptions) -> None:
     root = Path(options.out)
     ledger, commands = Ledger(root), Commands(root)
     carried = _carried(options)
-    if carried:  # the committed checkpoints of these results: their training outlives the machine
-        for arm in options.arms:
-            restore(root / "ckpt" / arm, Path(options.docs) / "checkpoints" / COMMITTED[arm])
     exams: dict[str, tuple[Exam, Path]] = {}
     for name, (line, cfg) in stages.items():
-        commands.append(line)
         kind, what = name.split()
         if kind == "data" and _trained(options, what) and not (what == "deconfounded" and options.favour):
             continue  # trained on it already (here or restored): the dataset is needed again only to retrain
+        commands.append(line)
         generate_once(cfg, ledger, f"generate {name}")
         if kind == "exam":
             exams[what] = (read(str(cfg.out)), Path(str(cfg.out)))
@@ -594,6 +591,9 @@ def release(options: ReleaseOptions) -> None:
     if options.train and options.favour and "deconfounded" not in options.arms and not cooled_from.is_file():
         raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({cooled_from})")
     begun = claim(options, begin=options.train)
+    if _carried(options):  # the committed checkpoints of these results: their training outlives the machine
+        for arm in ARMS:
+            restore(Path(options.out) / "ckpt" / arm, Path(options.docs) / "checkpoints" / COMMITTED[arm])
     if options.train:
         run(options)
     write_docs(collect(options) | {"settings": begun}, Path(options.docs))
