@@ -63,6 +63,7 @@ from train.stages import (
     gen_command,
     generate_once,
     recipe,
+    reference_digest,
     reference_report,
     restore,
     train_log,
@@ -239,15 +240,15 @@ def _report_dir(root: Path, arm: str, exam: str, sim: str) -> Path:
     return root / "reports" / arm / f"{exam}-{sim}"
 
 
-def run(options: ReleaseOptions) -> None:
+def run(options: ReleaseOptions, carried: dict) -> None:
     """Every stage the chosen arms need, in the order that gives results soonest: data, exams,
-    then per arm its training and its takes in our rebuild, then LIBERO's simulator's takes."""
+    then per arm its training and its takes in our rebuild, then LIBERO's simulator's takes; none
+    that `carried` (`_carried`) holds for the same weights or exam is redone."""
     stages = _stages(options)
     from train.policy import MODEL_FILE
 
     root = Path(options.out)
     ledger, commands = Ledger(root), Commands(root)
-    carried = _carried(options)
     exams: dict[str, tuple[Exam, Path]] = {}
     for name, (line, cfg) in stages.items():
         kind, what = name.split()
@@ -263,7 +264,7 @@ def run(options: ReleaseOptions) -> None:
         if registry.load(type_, world=world).code.named_place is not None and "ours" in options.sims:
             out = root / "reports" / "named_place" / axis
             commands.append(f"python -m eval policy=named_place exam={folder} workers=2 out={out}")
-            if not _is_carried(carried, (axis, "axis", "named_place", "ours"), _reference_digest(exam)):
+            if not _is_carried(carried, (axis, "axis", "named_place", "ours"), reference_digest(exam, "named_place")):
                 reference_report(exam, "named_place", out, ledger, f"named_place {axis}")
     trained = {}
     for arm in options.arms:
@@ -293,7 +294,7 @@ def _takes(
     sim: str,
     ledger: Ledger,
     commands: Commands,
-    carried: list[dict],
+    carried: dict,
     baseline: bool = True,
 ) -> None:
     """The checkpoint's take of each exam in `sim` (ours: with the `position` shortcut's faces),
@@ -338,18 +339,11 @@ def _key(row: dict) -> tuple[str, str, str, str]:
     return row["axis"], row["exam"], row["arm"], row["sim"]
 
 
-def _reference_digest(exam: Exam) -> str:
-    """What a reference policy's report is stamped with: its exam (train/stages.py `reference_report`)."""
-    from eval.scoring.baseline import exam_digest
-
-    return exam_digest(exam, "named_place")
-
-
-def collect(options: ReleaseOptions) -> dict:
-    """Every finished result under `out`, whichever process took it: the rows the docs show (the
-    options it was begun with, `claim`'s, are added by `release`)."""
+def collect(options: ReleaseOptions, carried: dict) -> dict:
+    """Every finished result under `out`, whichever process took it, and the `carried` rows whose
+    weights (or exam) are still the ones here: the rows the docs show (the options it was begun
+    with, `claim`'s, are added by `release`)."""
     from jobs.partial import Partial
-    from train.stages import train_log
 
     root = Path(options.out)
     rows, not_run, training, digests = [], [], {}, {}
@@ -390,8 +384,7 @@ def collect(options: ReleaseOptions) -> dict:
             rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "weights": stamp,
                          "faces": report["faces"]})  # fmt: skip
         if (exam := root / "exams" / axis / "exam.json").is_file():
-            digests[f"named_place {axis}"] = _reference_digest(read(str(exam.parent)))
-    carried = _carried(options)
+            digests[f"named_place {axis}"] = reference_digest(read(str(exam.parent)), "named_place")
     taken = {_key(r) for r in rows}
     for r in carried.get("rows", []):
         arm = r["arm"] if r["arm"] != "named_place" else f"named_place {r['axis']}"
@@ -591,12 +584,13 @@ def release(options: ReleaseOptions) -> None:
     if options.train and options.favour and "deconfounded" not in options.arms and not cooled_from.is_file():
         raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({cooled_from})")
     begun = claim(options, begin=options.train)
-    if _carried(options):  # the committed checkpoints of these results: their training outlives the machine
+    carried = _carried(options)  # read before the docs are rewritten
+    if carried:  # the committed checkpoints of these results: their training outlives the machine
         for arm in ARMS:
             restore(Path(options.out) / "ckpt" / arm, Path(options.docs) / "checkpoints" / COMMITTED[arm])
     if options.train:
-        run(options)
-    write_docs(collect(options) | {"settings": begun}, Path(options.docs))
+        run(options, carried)
+    write_docs(collect(options, carried) | {"settings": begun}, Path(options.docs))
     print((Path(options.docs) / RESULTS).read_text())
 
 

@@ -216,7 +216,7 @@ def restore(ckpt: Path, committed: Path) -> dict | None:
     if (log := train_log(ckpt)) is not None or not (committed / MODEL_FILE).is_file():
         return log
     record = torch.load(committed / MODEL_FILE, map_location="cpu", weights_only=False)
-    if "history" not in record or not record["history"]:
+    if not record.get("history"):
         return None
     ckpt.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(committed / MODEL_FILE, ckpt / MODEL_FILE)
@@ -282,13 +282,19 @@ def reference_report(exam: Exam, policy: str, out: Path, ledger: Ledger, stage: 
     """The report of the reference policy `policy` (eval/policies/__init__.py) on the whole of `exam`,
     taken once and read back while the exam is the same."""
     from eval.policies.registry import make
-    from eval.scoring.baseline import exam_digest
     from eval.scoring.battery import take
 
     def run() -> None:
         take(exam, exam.trials, make(policy), out, 2, policy, baseline=False)
 
-    return _once(out, exam_digest(exam, policy), run, ledger, stage)
+    return _once(out, reference_digest(exam, policy), run, ledger, stage)
+
+
+def reference_digest(exam: Exam, policy: str) -> str:
+    """What a reference policy's report is stamped with (`WEIGHTS_DIGEST`): the exam it took."""
+    from eval.scoring.baseline import exam_digest
+
+    return exam_digest(exam, policy)
 
 
 def _once(out: Path, digest: str, run: Callable[[], None], ledger: Ledger, stage: str) -> dict:
