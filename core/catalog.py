@@ -65,6 +65,9 @@ class Kind:
     contain: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # (centre offset, half size)
     contain_quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)  # LIBERO's region site, at rest (before the object's yaw)
     rim: float = 0.0  # > 0: a bowl, picked by its wall, this far from its centre
+    # where the hand takes a thing too wide to take whole (a moka pot's handle): from its origin, as
+    # it rests (before its yaw); the fingers close across it along `grasp_axis`
+    handle: tuple[float, float, float] | None = None
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
     neck: bool = False  # held by a narrow neck (a bottle): it swings, so it is carried gently (oracle/motion.py GENTLE)
@@ -104,8 +107,8 @@ class Kind:
         return surface_z + self.bottom
 
     def graspable(self) -> bool:
-        """Whether the open fingers fit across it (a bowl, taken by its wall, always)."""
-        return bool(self.rim) or self.size[0 if self.grasp_axis == "x" else 1] < GRIPPER_SPAN
+        """Whether the open fingers fit across it (a bowl, taken by its wall, or a thing by its handle, always)."""
+        return bool(self.rim) or self.handle is not None or self.size[0 if self.grasp_axis == "x" else 1] < GRIPPER_SPAN
 
     def grasp_depth(self) -> float:
         """How far below the top the fingers close: near the top for tall objects, and just

@@ -21,8 +21,8 @@ def top(kind: Kind, pos: np.ndarray) -> np.ndarray:
 
 
 def grip_height(kind: Kind) -> float:
-    """Height of the grip site above the object's bottom while it is grasped."""
-    return kind.height - kind.grasp_depth()
+    """Height of the grip site above the object's bottom while it is grasped (by its handle, the handle's)."""
+    return kind.bottom + kind.handle[2] if kind.handle is not None else kind.height - kind.grasp_depth()
 
 
 def grasp_point(kind: Kind, pos: np.ndarray) -> np.ndarray:

@@ -241,17 +241,39 @@ def _turbosquid(name: str, size: tuple[float, float, float], bottom: float, quat
     return Kind(name, "libero", size, bottom, params={"xml": f"turbosquid_objects/{name}/{name}.xml"}, quat=quat, **fields)
 
 
+def _mug(name: str, size: tuple[float, float, float], bottom: float, handle: float, **fields: object) -> Kind:
+    """A mug of LIBERO-10's, resting turned a quarter back, taken by its handle's upright bar
+    (`handle` from its origin along y, 5.6 cm up), the fingers closing across the bar."""
+    return _turbosquid(name, size, bottom, MUG_REST, grasp_axis="x", handle=(0.0, handle, 0.056), **fields)
+
+
 KINDS |= {
     k.name: k
     for k in (
-        _turbosquid("moka_pot", (0.0814, 0.1475, 0.1518), 0.0661, FLAT),
+        # the moka pot and the mugs are wider than the Panda's fingers open: the hand takes them by their
+        # handles (the pot's loop at its top, a mug's upright bar; measured from their collision boxes)
+        _turbosquid("moka_pot", (0.0814, 0.1475, 0.1518), 0.0661, FLAT, grasp_axis="x", handle=(0.0, -0.058, 0.06)),
         _scanned("chefmate_8_frypan", (0.2044, 0.3561, 0.0579), -0.0008),
-        _turbosquid("porcelain_mug", (0.0963, 0.1246, 0.1061), -0.0024, MUG_REST, called="white mug"),
-        _turbosquid("white_yellow_mug", (0.1061, 0.1397, 0.1032), 0.0001, MUG_REST, called="yellow and white mug"),
+        _mug("porcelain_mug", (0.0963, 0.1246, 0.1061), -0.0024, 0.0595, called="white mug"),
+        _mug("white_yellow_mug", (0.1061, 0.1397, 0.1032), 0.0001, -0.0641, called="yellow and white mug"),
         _turbosquid("red_coffee_mug", (0.0932, 0.1229, 0.1327), 0.0018, MUG_REST),
         _turbosquid("black_book", (0.1104, 0.0287, 0.1344), -0.0022, MUG_REST),
     )
 }
+
+# LIBERO-10's living room's region of its table right of the plate (LIVING_ROOM_SCENE6's
+# `living_room_table_plate_right_region`, a site LIBERO adds to the table's body at 0.41 m, 2.7 cm
+# under its top): LIBERO's `On(x, region)` is x's origin over its box, from 2 mm to 10.7 cm above
+# its centre; things rest on the table's top
+KINDS["plate_right"] = Kind(
+    "plate_right",
+    SITE,
+    (0.1, 0.1, 0.02676),
+    0.0,
+    inner=0.05,
+    spot=Spot(body="living_room_table", offset=(0.15, 0.1, 0.41), goal_name="living_room_table_plate_right_region"),
+    contain=((0.0, 0.0, 0.0545), (0.05, 0.05, 0.0525)),
+)
 
 # LIBERO's fixtures (envs/objects/articulated_objects.py): loaded with no free joint, posed by their
 # region; their inner joints (a cabinet's drawers, a stove's knob) are in LIBERO's state vectors.

@@ -5,8 +5,9 @@ thing moved, the place something is brought to, or the part of a piece of furnit
 moves), which task parameters it reads, whether the hand carries what it moves, how our scorer
 judges it (core/success.py), the LIBERO goal predicate it is, and its demonstration over the
 skills (core/demo.py). Every other module reads the record (`named`); none branches on a name.
-A program of two goals (LIBERO-10's "put both ...", "... and close it") is one more record: its
-`judge` both predicates, its `perform` both skills in turn.
+A task of more goals than one (LIBERO-10's "put both ...", "... and close it") is programs in
+turn: the spec's `task.params["then"]` lists the goals after the first (core/spec.py
+`EpisodeSpec.goals`); the oracle performs each, and the task is done when every goal is.
 """
 
 from __future__ import annotations
@@ -135,8 +136,9 @@ def named(name: str) -> Program:
 
 
 def perform(skills: Skills, spec: EpisodeSpec) -> None:
-    """The oracle's demonstration of an episode: its program's skill on its target."""
-    named(spec.task.program).perform(skills, spec)
+    """The oracle's demonstration of an episode: each goal's program's skill on its target, in turn."""
+    for goal in spec.goals():
+        named(goal.task.program).perform(skills, goal)
 
 
 def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:
@@ -144,5 +146,10 @@ def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> 
     return named(program).judge(spec, outcome, target)
 
 
+def each(spec: EpisodeSpec, outcome: Outcome) -> tuple[bool, ...]:
+    """Whether the rollout reached each of the task's goals (one, or LIBERO-10's two or three)."""
+    return tuple(achieved(goal, outcome, *goal.choice()) for goal in spec.goals())
+
+
 def succeeded(spec: EpisodeSpec, outcome: Outcome) -> bool:
-    return achieved(spec, outcome, *spec.choice())
+    return all(each(spec, outcome))

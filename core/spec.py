@@ -57,6 +57,9 @@ class Counterfactual:
     program: str | None = None
 
 
+THEN = "then"  # a task's goals after its first, in its params: [{"program", "target", "params"}, ...] (EpisodeSpec.goals)
+
+
 @dataclass(frozen=True)
 class TaskSpec:
     """What the oracle must do and how success is judged (see core/programs.py)."""
@@ -133,6 +136,19 @@ class EpisodeSpec:
         if cf is None:
             return self.target, self.task.program
         return cf.target, cf.program or self.task.program
+
+    def goals(self) -> tuple[EpisodeSpec, ...]:
+        """The task's goals in the order the oracle reaches them, each as a spec of one goal: itself,
+        or for a task of more (LIBERO-10's "put both ...", "... and close it") the first, then each
+        that `task.params["then"]` lists (its `program`, `target` and `params`), in the same scene."""
+        then = self.task.params.get(THEN)
+        if not then:
+            return (self,)
+        first = replace(self, task=replace(self.task, params={k: v for k, v in self.task.params.items() if k != THEN}))
+        return first, *(
+            replace(self, target=g["target"], task=replace(self.task, program=g["program"], params=dict(g.get("params", {}))))
+            for g in then
+        )
 
     def after_switch(self) -> EpisodeSpec:
         """The episode as asked once its instruction has changed (itself when it never does): the

@@ -9,7 +9,8 @@ scorer judges logged rollouts with the same predicates.
 * push  — the target slid at least `push_margin` along the push direction, never left the table
           by more than 2 cm, and no object was lifted.
 * place — the carried object (`params.object`) rests inside the target destination's footprint
-          and is not held above it; the destination itself stayed put.
+          and is not held above it; the destination itself stayed put. Onto a region of the table
+          (a place with a `contain` box: LIBERO-10's right of the plate), LIBERO's `On` of it.
 * pick_place — the target ends inside the container `params.destination`: its origin in the
           container's `contain` box (LIBERO's `In` predicate, as LIBERO-Object's goals use it),
           turned as LIBERO turns it where the basket's orientation is known (`_in_box`).
@@ -81,6 +82,8 @@ def placed(spec: EpisodeSpec, outcome: Outcome, destination: str) -> bool:
     dest = worlds.kind(spec.object(destination).kind, spec.setup.world)
     if dest.shelf is not None:  # what lies on a sloping shelf is judged as LIBERO judges it
         return _on_tilted(spec, outcome, carried, destination)
+    if dest.is_site and dest.contain is not None:  # a region of the table: LIBERO's `On` of it (site_object.py `under`)
+        return _in_box(spec, outcome, carried, destination, 0.0)
     obj = worlds.kind(spec.object(carried).kind, spec.setup.world)
     d_end, o_end = np.asarray(outcome.end[destination]), np.asarray(outcome.end[carried])
     inside = bool(np.all(np.abs(o_end[:2] - d_end[:2]) <= dest.inner))

@@ -47,6 +47,24 @@ class Clearance(Motion):
         are not in the way: like the furniture, they stand apart from the objects' places)."""
         return max(self.top_of(o.id)[2] for o in self.spec.objects if not self._kind(o.id).is_site) + margin
 
+    def clearance_along(self, to: np.ndarray, margin: float = 0.05) -> float:
+        """A height at which the held thing passes over every other object standing beside its straight
+        way from here to over `to` (its footprint and theirs CARRY_MARGIN apart): what a thing hanging
+        low from its handle is carried at, where passing over all of them reaches out of the arm's reach."""
+        assert self.held is not None
+        start, end = self.scene.object_pos(self.held[0])[:2], np.asarray(to[:2], float)
+        reach = np.hypot(*self._kind(self.held[0]).size[:2]) / 2 + CARRY_MARGIN
+        way, tops = end - start, [self.scene.world.surface_z]
+        for o in self.spec.objects:
+            kind = self._kind(o.id)
+            if o.id == self.held[0] or kind.is_site:
+                continue
+            at = self.scene.object_pos(o.id)[:2]
+            t = float(np.clip((at - start) @ way / max(float(way @ way), 1e-9), 0.0, 1.0))
+            if np.linalg.norm(at - (start + t * way)) < reach + np.hypot(*kind.size[:2]) / 2:
+                tops.append(float(self.top_of(o.id)[2]))
+        return max(tops) + margin
+
     def _rim_side(self, kind: catalog.Kind, pos: np.ndarray, top: float) -> float:
         """Which side of a bowl's wall to grasp (the direction from its centre): the first, from
         the one facing the robot's base, under whose outer finger nothing (a neighbour, a stove)

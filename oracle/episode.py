@@ -74,6 +74,10 @@ def demonstrate(
                 skills.carry_on(carrying)
             else:
                 skills.rise()  # a changed course leaves from above the objects, not through them
+        else:
+            skills.wait_still()  # plans are made around things at rest
+        if len(spec.goals()) > 1:  # a goal after a motion that leaves the wrist turned (the knob's) may need IK from home
+            skills.reseed = np.asarray(spec.setup.robot_home, float)
         script(skills, spec)
     except IKError as exc:
         return Demo(

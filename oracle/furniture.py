@@ -24,6 +24,7 @@ HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
 # LAY_STEPS), and comes nearer; the steps it waits once let go; how far out of the shelf it backs off
 LAY_GAP, LAY_START, LAY_ABOVE, LAY_OVER, LAY_NEAR = 0.025, 0.05, 0.05, 0.06, 0.04
 LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
+BESIDE_MARGIN = 0.01  # how far inside a place's edge a thing let down beside another is aimed (it drifts as it lands)
 
 
 class FurnitureSkills(Clearance):
@@ -75,15 +76,39 @@ class FurnitureSkills(Clearance):
         self.move_to(grip + [0.0, 0.0, 0.1])
 
     def _drop_point(self, destination_id: str) -> np.ndarray:
-        """Where over a destination a carried thing is let down: the centre of its top, or of an
-        open drawer's uncovered part (between the cabinet's front and the drawer's)."""
+        """Where over a destination a carried thing is let down: the centre of its top (where
+        something already stands on it, `_beside`), or of an open drawer's uncovered part (between
+        the cabinet's front and the drawer's)."""
         drawer, top = self._kind(destination_id).drawer, self.top_of(destination_id)
         if drawer is None:
-            return top
+            return self._beside(destination_id, top)
         out = self._pull_direction(destination_id)
         travel = float((self.scene.object_pos(destination_id) - np.asarray(self.spec.object(destination_id).pos)) @ out)
         mouth, front = drawer.opening
         return top + (mouth + front - travel) / 2 * out
+
+    def _beside(self, destination_id: str, top: np.ndarray) -> np.ndarray:
+        """`top`, or where something already stands on or in the destination (LIBERO-10's second moka
+        pot on the burner, second grocery in the basket), the point of the square the destination
+        holds things in (its `inner`; a container's `contain` box, the carried thing's half width in
+        from its edge) that is farthest from what stands there."""
+        kind, held = self._kind(destination_id), self.held[0] if self.held else None
+        half = max(kind.inner - BESIDE_MARGIN, 0.0)  # where a thing's origin may come on it
+        if kind.contain is not None and held:  # in it: the whole thing inside
+            half = max(kind.contain[1][0] - min(self._kind(held).size[:2]) / 2 - BESIDE_MARGIN, 0.0)
+        on = [
+            self.scene.object_pos(o.id)[:2]
+            for o in self.spec.objects
+            if o.id not in (held, destination_id)
+            and not self._kind(o.id).is_site
+            and np.all(np.abs(self.scene.object_pos(o.id)[:2] - top[:2]) < max(half, kind.inner))
+            and self.scene.object_pos(o.id)[2] > top[2] - self._kind(destination_id).height
+        ]
+        if not on or half == 0.0:
+            return top
+        grid = [top[:2] + [x, y] for x in np.linspace(-half, half, 9) for y in np.linspace(-half, half, 9)]
+        best = max(grid, key=lambda p: min(float(np.linalg.norm(p - q)) for q in on))
+        return np.array([best[0], best[1], top[2]])
 
     def _pull_direction(self, drawer_id: str) -> np.ndarray:
         """The way a drawer slides out, in the world."""

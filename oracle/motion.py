@@ -24,6 +24,10 @@ OPEN, CLOSED = -1.0, 1.0
 DELTA_GAIN = 3.0  # how much of the hand's error an end-effector delta asks for
 GENTLE = Limits(velocity=1.0, acceleration=2.0, jerk=15.0)  # a bottle held by its neck stays in the hand at these
 SETTLE_POS, SETTLE_ROT, MAX_SETTLE_STEPS = 0.005, 0.05, 40  # m, rad, control steps
+# A thing moving faster than this (m per control step) is still falling: LIBERO-10's living room's
+# initial states launch the milk and the orange juice 0.5 m up (LIBERO's own simulator as ours); an
+# oracle planning around them waits, holding the arm, until they land (at most MAX_FALL_STEPS)
+FALLING, MAX_FALL_STEPS = 0.005, 60
 
 
 def rotation_vector(rot: np.ndarray) -> np.ndarray:
@@ -122,6 +126,13 @@ class Motion:
     def hold(self, steps: int) -> None:
         for _ in range(steps):
             self._execute(self.q)
+
+    def wait_still(self) -> None:
+        """Hold the arm while anything in the scene is still falling (FALLING): nothing, where all is at rest."""
+        for _ in range(MAX_FALL_STEPS):
+            if self.scene.fastest() * self.dt <= FALLING:
+                return
+            self.hold(1)
 
     def close(self, steps: int = 8) -> None:
         self._settle(self.q)

@@ -396,6 +396,13 @@ class Scene:
             return d.xpos[body.body_id] + d.xmat[body.body_id].reshape(3, 3) @ body.offset
         return (d.site_xpos[body.site] if body.site >= 0 else d.xpos[body.body_id]).copy()
 
+    def fastest(self) -> float:
+        """The speed (m/s) of the fastest-moving free object of the episode (its free joint's linear velocity)."""
+        model, qvel = self.model, self.data.qvel
+        joints = (model.body_jntadr[b.body_id] for b in self.placed.values() if not b.fixed)
+        dofs = [model.jnt_dofadr[j] for j in joints if j >= 0]
+        return max((float(np.linalg.norm(qvel[d : d + 3])) for d in dofs), default=0.0)
+
     def body_pose(self, object_id: str) -> tuple[np.ndarray, np.ndarray]:
         """The position and rotation matrix of the body an object is (or, a place, is on: a drawer, a knob)."""
         body = self.placed[object_id].body_id

@@ -66,6 +66,8 @@ class Skills(FurnitureSkills):
         if kind.rim:  # fingers across the wall, closing along its radius
             axis = self._rim_side(kind, pos, top[2])
             point[:2] = top[:2] = pos[:2] + kind.rim * np.array([np.cos(axis), np.sin(axis)])
+        if kind.handle is not None:  # down onto the handle, turned as the thing is
+            point = top = pos + yaw_matrix(self.scene.object_yaw(object_id)) @ np.asarray(kind.handle)
         yaw = grasp_yaw(axis)
         self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
         if kind.rim:  # straight down onto the wall: a joint-space path could sweep a finger through the bowl
@@ -114,16 +116,21 @@ class Skills(FurnitureSkills):
             self._lay(destination_id)
             return
         over = self._drop_point(destination_id)
-        rim = self._kind(self.held[0]).rim > 0  # a bowl, held by its wall, hanging off-centre
+        held = self._kind(self.held[0])
+        rim = held.rim > 0  # a bowl, held by its wall, hanging off-centre
+        aside = rim or held.handle is not None  # held off its centre: by its wall, by its handle
         if rim:  # the hand goes where the bowl's centre comes over the destination
             over[:2] -= self.scene.object_pos(self.held[0])[:2] - self.scene.ee_pos()[:2]
+        elif aside:  # and where the thing's origin does, the handle where it is on the thing standing (hanging, it swings)
+            over[:2] += (yaw_matrix(self.scene.object_yaw(self.held[0])) @ np.asarray(held.handle))[:2]
         release_z = contact.release_point(
             self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
         )[2]
-        carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, self.clearance() + self.held[1])
+        over_all = self.clearance_along(over) if held.handle is not None else self.clearance()
+        carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, over_all + self.held[1])
         over = self._within_reach(over, max(carry_z, release_z + RETREAT), destination_id)
         above, down = [over[0], over[1], carry_z], [over[0], over[1], release_z]
-        yaw = self.yaw if rim else self._release_yaw(above, down, destination_id)  # a turned bowl would hang elsewhere
+        yaw = self.yaw if aside else self._release_yaw(above, down, destination_id)  # turned, it would hang elsewhere
         across = self._path_to(above, yaw)
         # Up first where the way across, still rising, would pass near a standing object, a hanging
         # bowl could swing into furniture, or a bottle hanging by its neck pass under the cabinet's

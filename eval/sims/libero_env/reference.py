@@ -28,6 +28,12 @@ Commands (the request is JSON; what comes back is written to <out>):
   action and each object's final position. With a `"suite"` (a table suite: libero_spatial,
   libero_goal) the problem is instead that suite's own table and fixtures holding the request's
   objects, with goal `(On <target> <container>)`, its fixtures posed as the request's `fixtures` say.
+* `task_replay` — {"suite", "cases": [{"task", "state", "actions"}, ...]}: each case's actions
+  stepped in LIBERO's environment of the suite's task (its own BDDL file) from its initial state
+  number `state`; <out> (.json) gets per case `check_success()` after the last action, each of
+  the task's goal predicates (`goals`: [[predicate words], true or false], LIBERO's order) and
+  each object's final position: a demonstration made from LIBERO's own initial state judged
+  goal by goal as LIBERO judges it.
 * `scenes` — `replay`'s request (actions unused) and `"size"`: LIBERO's frames at each episode's
   recorded initial state, as `render` writes them for LIBERO's own initial states (keys `<k>-...`
   for the k-th episode): generated scenes compared picture for picture.
@@ -205,6 +211,30 @@ def replay(request: dict, out: str) -> None:
         json.dump(results, f)
 
 
+def task_replay(request: dict, out: str) -> None:
+    results, envs = [], {}
+    for case in request["cases"]:
+        if case["task"] not in envs:
+            envs[case["task"]] = (*task_bddl(request["suite"], case["task"]), None)
+        bddl, states, env = envs[case["task"]]
+        if env is None:
+            env = make_env(bddl, 32, cameras=False)
+            envs[case["task"]] = (bddl, states, env)
+        env.reset()
+        env.set_init_state(states[case["state"]])
+        for action in case["actions"]:
+            env.step(np.asarray(action, float))
+        goals = env.env.parsed_problem["goal_state"]
+        results.append({
+            "success": bool(env.check_success()),
+            "goals": [[list(g), bool(env.env._eval_predicate(g))] for g in goals],
+            "objects": positions(env),
+        })  # fmt: skip
+    for _, _, env in envs.values():
+        env.close()
+    Path(out).write_text(json.dumps(results))
+
+
 def scenes(request: dict, out: str) -> None:
     """LIBERO's own frames at generated episodes' initial states (`replay`'s request, no actions
     needed, and `size`): one environment holding every object of the request, set to each episode's
@@ -327,5 +357,8 @@ if __name__ == "__main__":
     command, request_path, out_path = sys.argv[1:4]
     with open(request_path) as f:
         request = json.load(f)
-    commands = {"render": render, "replay": replay, "scenes": scenes, "model": model, "contain": contain, "bench": bench}
+    commands = {
+        "render": render, "replay": replay, "task_replay": task_replay, "scenes": scenes, "model": model, "contain": contain,
+        "bench": bench,
+    }  # fmt: skip
     commands[command](request, out_path)

@@ -1,0 +1,73 @@
+"""A task of more goals than one (LIBERO-10's): one spec, its goals after the first in
+`task.params["then"]`, each judged by its own program's predicate; the task done when every goal is.
+Positions alone, no simulator."""
+
+from __future__ import annotations
+
+import pytest
+
+from core import programs
+from core.profiles import LIBERO
+from core.spec import THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
+from core.success import Outcome
+
+BASKET = (0.0, 0.27, 0.432)  # LIVING_ROOM_SCENE1's basket, at rest
+SOUP, CHEESE = (-0.1, -0.15, 0.475), (0.08, -0.19, 0.445)
+IN_BASKET = (0.0, 0.27, 0.47)  # a grocery's origin inside the basket's box
+PUDDING = (-0.05, 0.1, 0.45)
+RIGHT_OF_PLATE = (0.15, 0.1, 0.41)  # the table's region right of the plate (its site)
+
+
+def _spec() -> EpisodeSpec:
+    """LIVING_ROOM_SCENE1: both the alphabet soup and the cream cheese in the basket."""
+    objects = (
+        SceneObject("alphabet_soup_1", "alphabet_soup", "alphabet soup", 0, SOUP),
+        SceneObject("cream_cheese_1", "cream_cheese", "cream cheese", 1, CHEESE),
+        SceneObject("basket_1", "basket", "basket", 2, BASKET),
+    )
+    then = [{"program": "pick_place", "target": "cream_cheese_1", "params": {"destination": "basket_1"}}]
+    task = TaskSpec("pick_place", params={"destination": "basket_1", THEN: then})
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_living_room")
+    return EpisodeSpec("libero_10", 0, 0, objects, "alphabet_soup_1", "", "", (), (), task, setup)
+
+
+def test_the_goals_are_the_first_then_each_listed() -> None:
+    spec = _spec()
+    first, second = spec.goals()
+    into = {"destination": "basket_1"}
+    assert (first.target, first.task.program, first.task.params) == ("alphabet_soup_1", "pick_place", into)
+    assert (second.target, second.task.program, second.task.params) == ("cream_cheese_1", "pick_place", into)
+    assert second.objects == spec.objects and second.setup == spec.setup
+    assert first.goals() == (first,), "a spec of one goal is its own only goal"
+    assert EpisodeSpec.from_json(spec.to_json()) == spec, "the goals round-trip through the spec's JSON"
+
+
+@pytest.mark.parametrize(
+    ("moved", "each"),
+    [({}, (False, False)), ({"alphabet_soup_1": IN_BASKET}, (True, False)),
+     ({"cream_cheese_1": IN_BASKET}, (False, True)), ({"alphabet_soup_1": IN_BASKET, "cream_cheese_1": IN_BASKET}, (True, True))],
+)  # fmt: skip
+def test_each_goal_is_judged_on_its_own_and_the_task_when_all_are(moved: dict, each: tuple[bool, bool]) -> None:
+    spec = _spec()
+    start = {o.id: o.pos for o in spec.objects}
+    outcome = Outcome(start, {**start, **moved}, (0.0, 0.0, 1.0))
+    assert programs.each(spec, outcome) == each
+    assert programs.succeeded(spec, outcome) is all(each)
+
+
+@pytest.mark.parametrize(
+    ("end", "on"),
+    [((0.15, 0.1, 0.45), True), ((0.19, 0.14, 0.45), True), ((0.21, 0.1, 0.45), False), ((0.15, 0.1, 0.53), False)],
+)
+def test_a_thing_is_right_of_the_plate_when_its_origin_is_over_the_region(end: tuple, on: bool) -> None:
+    """LIBERO's `On(x, living_room_table_plate_right_region)`: x's origin over the region's 10 cm
+    square, from 2 mm to 10.7 cm above its site."""
+    objects = (
+        SceneObject("chocolate_pudding_1", "chocolate_pudding", "chocolate pudding", 0, PUDDING),
+        SceneObject("plate_right", "plate_right", "right of the plate", 1, RIGHT_OF_PLATE),
+    )
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_living_room")
+    task = TaskSpec("place", params={"object": "chocolate_pudding_1"})
+    spec = EpisodeSpec("libero_10", 0, 0, objects, "plate_right", "", "", (), (), task, setup)
+    start = {o.id: o.pos for o in objects}
+    assert programs.succeeded(spec, Outcome(start, {**start, "chocolate_pudding_1": end}, (0.0, 0.0, 1.0))) is on
