@@ -21,9 +21,9 @@ class Skills(Protocol):
     def lift(self, height: float = 0.15) -> None:
         """Raise the hand (and whatever it holds) straight up by `height` metres."""
 
-    def place(self, destination_id: str) -> None:
+    def place(self, destination_id: str, at: tuple[float, float] | None = None) -> None:
         """Carry the held object over the destination, lower it onto it (lay it along a sloping
-        shelf), release."""
+        shelf), release; `at`: where on it, from its centre (two things on one place)."""
 
     def push(self, object_id: str) -> None:
         """Slide the object along the table, away from the robot."""

@@ -82,10 +82,12 @@ def _carry(skills: Skills, spec: EpisodeSpec) -> None:
 
 
 def _place(skills: Skills, spec: EpisodeSpec) -> None:
-    """Bring the object to the named place (across a sloping shelf's slope, to be laid along it)."""
+    """Bring the object to the named place (across a sloping shelf's slope, to be laid along it;
+    `params.at` from its centre, where a task brings two things to it)."""
     skills.grasp(spec.task.params["object"], onto=spec.target)
     skills.lift(CARRY_LIFT)
-    skills.place(spec.target)
+    at = spec.task.params.get("at")
+    skills.place(spec.target, None if at is None else tuple(at))
 
 
 def _place_in(skills: Skills, spec: EpisodeSpec) -> None:

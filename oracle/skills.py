@@ -106,16 +106,18 @@ class Skills(FurnitureSkills):
                 return
             self.move_linear(self.scene.ee_pos() + [*(UNDER_STEP * toward), 0.0])
 
-    def place(self, destination_id: str) -> None:
-        """Carry the held object over the destination, lower it onto it (lay it along a sloping
-        shelf), release, retreat; the hand and what it carries keep CARRY_MARGIN from the objects
-        standing beside the way."""
+    def place(self, destination_id: str, at: tuple[float, float] | None = None) -> None:
+        """Carry the held object over the destination (`at` from its centre, where given), lower it
+        onto it (lay it along a sloping shelf), release, retreat; the hand and what it carries keep
+        CARRY_MARGIN from the objects standing beside the way."""
         if self.held is None:
             raise RuntimeError("place() needs an object in the gripper: grasp() first")
         if self._kind(destination_id).shelf is not None:
             self._lay(destination_id)
             return
         over = self._drop_point(destination_id)
+        if at is not None:
+            over[:2] = self.top_of(destination_id)[:2] + np.asarray(at)
         held = self._kind(self.held[0])
         rim = held.rim > 0  # a bowl, held by its wall, hanging off-centre
         aside = rim or held.handle is not None  # held off its centre: by its wall, by its handle
