@@ -10,6 +10,7 @@ from core import programs
 from core.profiles import LIBERO
 from core.spec import THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome
+from eval.sims.libero import RowStart, predicate
 
 BASKET = (0.0, 0.27, 0.432)  # LIVING_ROOM_SCENE1's basket, at rest
 SOUP, CHEESE = (-0.1, -0.15, 0.475), (0.08, -0.19, 0.445)
@@ -71,3 +72,24 @@ def test_a_thing_is_right_of_the_plate_when_its_origin_is_over_the_region(end: t
     spec = EpisodeSpec("libero_10", 0, 0, objects, "plate_right", "", "", (), (), task, setup)
     start = {o.id: o.pos for o in objects}
     assert programs.succeeded(spec, Outcome(start, {**start, "chocolate_pudding_1": end}, (0.0, 0.0, 1.0))) is on
+
+
+def test_liberos_goal_for_a_region_of_the_table_is_on_it() -> None:
+    """What `sim=libero` asks LIBERO's `check_success` for a thing brought to a region of the table
+    (a place with a `contain` box): `On` the region, as LIVING_ROOM_SCENE6's BDDL file says; into a
+    container: `In` its contain region."""
+    objects = (
+        SceneObject("pudding", "chocolate_pudding", "chocolate pudding", 0, PUDDING),
+        SceneObject("region", "plate_right", "right of the plate", 1, RIGHT_OF_PLATE),
+        SceneObject("basket", "basket", "basket", 2, BASKET),
+    )
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_living_room")
+    spec = EpisodeSpec(
+        "libero_10", 0, 0, objects, "region", "", "", (), (), TaskSpec("place", params={"object": "pudding"}), setup
+    )
+    start = RowStart(
+        "k", {}, {}, None, ("pudding", "basket", "region"), ("chocolate_pudding_1", "basket_1"),
+        ("living_room_table_plate_right_region",),
+    )  # fmt: skip
+    assert predicate(spec, start, "region", "place") == ["On", "chocolate_pudding_1", "living_room_table_plate_right_region"]
+    assert predicate(spec, start, "basket", "place") == ["In", "chocolate_pudding_1", "basket_1_contain_region"]
