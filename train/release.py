@@ -90,6 +90,8 @@ FAVOURED = "favoured"  # the deconfounded arm with its cool-down redone favourin
 SIMS = ("ours", "libero")
 CANONICAL = ("libero_object", "libero_spatial", "libero_goal")
 COMMITTED = {"deconfounded": "libero-release-lora", "confounded": "libero-release-confounded-lora"}
+# the checkpoint of the object axis alone, whose canonical task rate the release's stands beside
+SINGLE_AXIS = "libero_object-deconfounded-lora"
 RESULTS, JSON, PICTURE = "RESULTS_LIBERO_AXES.md", "results_libero_axes.json", "libero_axes.png"
 RECORD = "release.json"  # in `out`: the options its results depend on, written by the invocation that began it
 # The options the results depend on (not how many processes or threads made them, nor where).
@@ -478,6 +480,18 @@ def write_docs(results: dict, docs: Path) -> None:
         ]
         for r in canonical:
             lines.append(f"| {r['axis']} | {_face(r, 'task')} | {_face(r, 'obeyed_name')} | {_face(r, 'true_target')} |")
+        single = _single_axis(docs)
+        if single is not None:
+            faces = " | ".join(cell(single["faces"][f]["libero"]) for f in ("task", "obeyed_name", "true_target"))
+            lines += [
+                "",
+                f"Beside it, the single-axis checkpoint (`{SINGLE_AXIS}`, LIBERO-Object's object axis alone: "
+                f"docs/RESULTS_LIBERO.md) on {single['exam']}, in LIBERO's simulator:",
+                "",
+                "| suite | task | obeyed name | true target |",
+                "|---|---|---|---|",
+                f"| libero_object | {faces} |",
+            ]
     lines += _short_of(results)
     if results["training"]:
         lines += ["", "## Training", ""]
@@ -532,6 +546,14 @@ def _short_of(results: dict) -> list[str]:
             rates = (cell(f[face]) if face in f else "—" for face in ("task", "obeyed_name"))
             lines.append(f"| {value_} | {' | '.join(rates)} |")
     return lines
+
+
+def _single_axis(docs: Path) -> dict | None:
+    """The single-axis checkpoint's row on LIBERO-Object's canonical exam in LIBERO's simulator
+    (docs/results_libero.json, scripts/libero_sim_results.py), if recorded."""
+    path = docs / "results_libero.json"
+    rows = json.loads(path.read_text()).get("libero_sim", {}).get("rows", []) if path.is_file() else []
+    return next((r for r in rows if r["checkpoint"] == SINGLE_AXIS and r["exam_folder"] == "canonical"), None)
 
 
 def _face(row: dict | None, face: str) -> str:
