@@ -214,12 +214,10 @@ def replay(request: dict, out: str) -> None:
 def task_replay(request: dict, out: str) -> None:
     results, envs = [], {}
     for case in request["cases"]:
-        if case["task"] not in envs:
-            envs[case["task"]] = (*task_bddl(request["suite"], case["task"]), None)
-        bddl, states, env = envs[case["task"]]
-        if env is None:
-            env = make_env(bddl, 32, cameras=False)
-            envs[case["task"]] = (bddl, states, env)
+        if case["task"] not in envs:  # one environment per task, made when its first case comes
+            bddl, states = task_bddl(request["suite"], case["task"])
+            envs[case["task"]] = (make_env(bddl, 32, cameras=False), states)
+        env, states = envs[case["task"]]
         env.reset()
         env.set_init_state(states[case["state"]])
         for action in case["actions"]:
@@ -230,7 +228,7 @@ def task_replay(request: dict, out: str) -> None:
             "goals": [[list(g), bool(env.env._eval_predicate(g))] for g in goals],
             "objects": positions(env),
         })  # fmt: skip
-    for _, _, env in envs.values():
+    for env, _ in envs.values():
         env.close()
     Path(out).write_text(json.dumps(results))
 
