@@ -35,7 +35,10 @@ class Skills(Protocol):
         """Take a knob and turn it the way it turns on."""
 
     def pull_open(self, drawer_id: str, travel: float = ...) -> None:
-        """Take a drawer's handle and pull the drawer `travel` out."""
+        """Take a drawer's handle and pull the drawer `travel` out (nothing where it is out that far)."""
+
+    def push_closed(self, drawer_id: str) -> None:
+        """Push an open drawer shut with the closed fingers against its front."""
 
 
 DemoScript = Callable[[Skills, EpisodeSpec], None]  # a demonstration, written over the skills: `demo(skills, spec)`

@@ -37,17 +37,33 @@ class Drawer:
     """A cabinet drawer, its place the region site inside it: its handle bar `handle` from the site
     (the drawer's own frame, as `pull`, the way it slides out); `roll`, how far the hand taking it
     turns from closing straight up and down; `opening`, how far out from the closed drawer's site
-    the cabinet's top ends and the inner face of its front lie (the uncovered part, open, is between).
-    Open once it slid `open_travel` out: LIBERO's wooden cabinet, its joint below -0.14 m."""
+    the cabinet's top ends and the inner face of its front lie (the uncovered part, open, is between);
+    `press`, where a hand pushing it shut presses its front, from the site (the drawer's frame): the
+    front's outer face below the site's height, beside the handle bar on the side away from the
+    robot (in LIBERO-10's KITCHEN_SCENE4 a wine bottle stands before the other side); `drop`, how
+    far over its floor a carried thing is let go (under other drawers, lower, the wrist met the
+    handle bar of the drawer two above).
+    Open once it slid `open_travel` out: LIBERO's cabinets, their joint below -0.14 m; closed once
+    in past where it stands shut: their joint above 0 (it stops at 0.01 m)."""
 
     handle: tuple[float, float, float]
     opening: tuple[float, float]
     pull: tuple[float, float, float] = (0.0, -1.0, 0.0)
     roll: float = 0.0
     open_travel: float = 0.14
+    press: tuple[float, float, float] = (0.075, -0.0892, -0.015)
+    drop: float = 0.0
 
     def opened(self, start: tuple[float, ...], end: tuple[float, ...]) -> bool:
         return float(np.linalg.norm(np.subtract(end, start))) >= self.open_travel
+
+    def closed(self, start: tuple[float, ...], end: tuple[float, ...], shut: tuple[float, ...]) -> bool:
+        """Whether the drawer, its site `shut` where it stands shut, went from open at `start` to
+        past `shut` at `end`, in along the way it had slid out (horizontally: a place's recorded
+        height is where things rest in it)."""
+        out = np.subtract(start, shut)[:2]
+        travel = float(np.linalg.norm(out))
+        return travel >= self.open_travel and float(np.subtract(end, shut)[:2] @ out) < 0.0
 
 
 @dataclass(frozen=True)

@@ -59,14 +59,15 @@ RACK_TILT = float(2 * np.arctan2(-0.5187733, 0.8549119))  # its turn about the r
 KNOB_RADIUS = 0.03  # how far from the stove knob's axis the point that stands for it is
 
 
-def _drawer(name: str, site: str, floor: float, handle: float, roll: float = 0.0) -> Kind:
+def _drawer(name: str, site: str, floor: float, handle: float, roll: float = 0.0, drop: float = 0.0) -> Kind:
     """A cabinet drawer as a place (model `site`): LIBERO's region site inside it, things resting on
     its floor `floor` below the site's centre, `In` it its box (the floor lowered 1 cm, as LIBERO's
     `in_box` lowers it: core/success.py). Its handle bar is `handle` below the site's centre and
     DRAWER_HANDLE in front of it (the drawer's own frame; the uncovered part of it open lies between
     DRAWER_OPENING's two faces); `roll`: how far the hand taking it turns from closing straight up
-    and down (core/furniture.py `Drawer`, oracle/skills.py pull_open)."""
-    drawer = Drawer((*DRAWER_HANDLE, -handle), DRAWER_OPENING, roll=roll)
+    and down; `drop`, how far over its floor a thing is let go (core/furniture.py `Drawer`,
+    oracle/skills.py pull_open)."""
+    drawer = Drawer((*DRAWER_HANDLE, -handle), DRAWER_OPENING, roll=roll, drop=drop)
     return replace(_on_fixture(name, site, DRAWER_REGION, floor, 0.05), contain=((0.0, 0.0, 0.0), DRAWER_REGION), drawer=drawer)
 
 
@@ -137,6 +138,9 @@ KINDS: dict[str, Kind] = {
         # the middle drawer's handle is 11 cm over the table: a hand closing straight up and down on it
         # would sweep its palm (20 cm along the fingers' closing axis) through a plate standing before it
         _drawer("middle_drawer", "wooden_cabinet_1_middle_region", -0.0275, 0.0065, roll=float(np.pi / 4)),
+        # LIBERO-10's white cabinet (the wooden one's model in white): its bottom drawer, which
+        # KITCHEN_SCENE4 starts open and asks shut with the black bowl in it
+        _drawer("white_bottom_drawer", "white_cabinet_1_bottom_region", -0.0262, 0.0059, drop=0.025),
         # the stove's knob: a point on it 3 cm from its axis (LIBERO's model has no site on it), which
         # a turn of the knob carries along an arc
         Kind(

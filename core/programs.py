@@ -75,10 +75,11 @@ def _push(skills: Skills, spec: EpisodeSpec) -> None:
 
 
 def _carry(skills: Skills, spec: EpisodeSpec) -> None:
-    """Grasp the target and put it where the world carries it (a basket, a plate)."""
+    """Grasp the target and put it where the world carries it (a basket, a plate; `params.at` from
+    its centre, where a task brings two things to it)."""
     skills.grasp(spec.target)
     skills.lift(CARRY_LIFT)
-    skills.place(spec.task.params["destination"])
+    skills.place(spec.task.params["destination"], _at(spec))
 
 
 def _place(skills: Skills, spec: EpisodeSpec) -> None:
@@ -86,12 +87,16 @@ def _place(skills: Skills, spec: EpisodeSpec) -> None:
     `params.at` from its centre, where a task brings two things to it)."""
     skills.grasp(spec.task.params["object"], onto=spec.target)
     skills.lift(CARRY_LIFT)
+    skills.place(spec.target, _at(spec))
+
+
+def _at(spec: EpisodeSpec) -> tuple[float, float] | None:
     at = spec.task.params.get("at")
-    skills.place(spec.target, None if at is None else tuple(at))
+    return None if at is None else tuple(at)
 
 
 def _place_in(skills: Skills, spec: EpisodeSpec) -> None:
-    """Open the drawer part way, then put the object inside."""
+    """Open the drawer part way (where it is not open that far already), then put the object inside."""
     skills.pull_open(spec.target, DRAWER_SLOT)
     skills.grasp(spec.task.params["object"], onto=spec.target)
     skills.lift(DRAWER_LIFT)
@@ -100,6 +105,10 @@ def _place_in(skills: Skills, spec: EpisodeSpec) -> None:
 
 def _open(skills: Skills, spec: EpisodeSpec) -> None:
     skills.pull_open(spec.target)
+
+
+def _close(skills: Skills, spec: EpisodeSpec) -> None:
+    skills.push_closed(spec.target)
 
 
 def _turn_on(skills: Skills, spec: EpisodeSpec) -> None:
@@ -119,6 +128,7 @@ PROGRAMS: dict[str, Program] = {
         Program("pick_place", "moved", success.contained, _carry, ("destination",)),
         Program("pick_place_on", "moved", success.on, _carry, ("destination",)),
         Program("open", "part", success.opened, _open, held=False, libero="Open"),
+        Program("close", "part", success.closed, _close, held=False, libero="Close"),
         Program("turn_on", "part", success.turned_on, _turn_on, held=False, libero="Turnon"),
         Program("place_in", "place", success.put_in, _place_in, ("object",), libero="In"),
         Program("push_to", "place", success.pushed_to, _push_to, ("object",), held=False, libero="On"),

@@ -20,6 +20,9 @@ scorer judges logged rollouts with the same predicates.
           stand in for LIBERO's contact test).
 * open  — the target (a drawer, its place inside it) slid out at least its `Drawer.open_travel`:
           LIBERO's `Open` of a cabinet drawer, its joint past -0.14 m (LIBERO's drawers all start closed).
+* close — the target (a drawer, its place inside it), which started open (its `Drawer.open_travel`
+          out of where it stands shut, its recorded place), ends in past where it stands shut:
+          LIBERO's `Close` of a cabinet drawer, its joint above 0 (LIBERO-10's drawer starts open).
 * turn_on — the target (a point on the stove's knob) was carried along an arc of at least its
           `Knob.turn_on` radians about the knob's axis: LIBERO's `TurnOn` of the stove, its knob's
           joint at 0.5 rad or more (it starts at 0 and turns one way only).
@@ -139,6 +142,11 @@ def pushed_to(spec: EpisodeSpec, outcome: Outcome, region: str) -> bool:
 
 def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
     return worlds.kind(spec.object(drawer).kind, spec.setup.world).part(Drawer).opened(outcome.start[drawer], outcome.end[drawer])
+
+
+def closed(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
+    kind = worlds.kind(spec.object(drawer).kind, spec.setup.world)
+    return kind.part(Drawer).closed(outcome.start[drawer], outcome.end[drawer], spec.object(drawer).pos)
 
 
 def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:

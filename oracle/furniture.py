@@ -1,5 +1,5 @@
-"""The furniture's skills: pull a drawer open, turn the stove's knob, lay a bottle along a
-sloping shelf, and where over an open drawer a carried thing is let down. Each reads its piece's
+"""The furniture's skills: pull a drawer open and push it shut, turn the stove's knob, lay a bottle
+along a sloping shelf, and where over an open drawer a carried thing is let down. Each reads its piece's
 typed kind (core/furniture.py: `Drawer`, `Knob`, `Shelf`); the generic skills (oracle/skills.py)
 build on these.
 """
@@ -10,8 +10,9 @@ import numpy as np
 
 from core.furniture import Drawer, Shelf
 from core.rotations import facing, turned, yaw_matrix
-from oracle.clearance import Clearance
+from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
 from oracle.ik import DOWN, grasp_yaw
+from oracle.motion import CLOSED
 
 KNOB_GRIP = 0.012  # how far below the top of the stove knob's ridge the fingers close on it
 # how far the hand turns the knob (radians): past LIBERO's 0.5 with the fingers' slip (ours 1.06, LIBERO's 1.18:
@@ -24,6 +25,11 @@ HANDLE_REACH, DRAWER_PULL = 0.08, 0.19
 # LAY_STEPS), and comes nearer; the steps it waits once let go; how far out of the shelf it backs off
 LAY_GAP, LAY_START, LAY_ABOVE, LAY_OVER, LAY_NEAR = 0.025, 0.05, 0.05, 0.06, 0.04
 LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
+# pushing a drawer shut: how far in front of it the fingertips come; how far past where it stands shut
+# the hand is sent (it stops 1 cm past, LIBERO's `Close` wants it past 0: sent 1.5 cm past at 0.1 m/s,
+# in LIBERO's simulator, whose arm lags more, it stayed 2 cm out); how fast; how far out the hand backs
+# off before it rises (past the handle bar of the drawer above); how far below level it points
+FRONT_GAP, SHUT_PAST, SHUT_SPEED, SHUT_BACK, SHUT_PITCH = 0.03, 0.04, 0.05, 0.06, float(np.radians(30))
 BESIDE_MARGIN = 0.01  # how far inside a place's edge a thing let down beside another is aimed (it drifts as it lands)
 
 
@@ -60,13 +66,20 @@ class FurnitureSkills(Clearance):
 
     def turn_on(self, knob_id: str) -> None:
         """Take the knob's ridge from above, fingers across it, and turn the hand KNOB_TURN about
-        the knob's axis (the way its joint turns on)."""
+        the knob's axis (the way its joint turns on). Where the way to it passes near a standing
+        thing (LIBERO-10's moka pot just set on the stove: LIBERO's simulator, its hand a few
+        millimetres off ours, knocked it off), the hand goes over at the clearance height first."""
         axis, rot = self.scene.body_pose(knob_id)
         ridge = np.append(rot[:2, 1], 0.0)  # the ridge lies along the knob's y
         top = self.scene.surface_below(axis[:2], axis[2] + 0.3)
         yaw = grasp_yaw(float(np.arctan2(-ridge[0], ridge[1])))  # fingers closing across the ridge
         grip = np.array([axis[0], axis[1], top - KNOB_GRIP])
-        self.move_to(grip + [0.0, 0.0, 0.07], yaw)
+        above = grip + [0.0, 0.0, 0.07]
+        if self._gap(self._path_to(above, yaw)[1], knob_id) < CARRY_MARGIN:  # over what stands beside the way, then down
+            high = max(self.scene.ee_pos()[2], self.clearance())
+            self.move_to([*self.scene.ee_pos()[:2], high], yaw)
+            self.move_to([*above[:2], high], yaw)
+        self.move_to(above, yaw)
         self.move_to(grip, yaw)
         self.close()
         self.twist(yaw + KNOB_TURN, KNOB_SPEED)
@@ -82,10 +95,8 @@ class FurnitureSkills(Clearance):
         drawer, top = self._kind(destination_id).drawer, self.top_of(destination_id)
         if drawer is None:
             return self._beside(destination_id, top)
-        out = self._pull_direction(destination_id)
-        travel = float((self.scene.object_pos(destination_id) - np.asarray(self.spec.object(destination_id).pos)) @ out)
         mouth, front = drawer.opening
-        return top + (mouth + front - travel) / 2 * out
+        return top + (mouth + front - self._pulled(destination_id)) / 2 * self._pull_direction(destination_id)
 
     def _beside(self, destination_id: str, top: np.ndarray) -> np.ndarray:
         """`top`, or where something already stands on or in the destination (LIBERO-10's second moka
@@ -114,9 +125,17 @@ class FurnitureSkills(Clearance):
         """The way a drawer slides out, in the world."""
         return self.scene.body_pose(drawer_id)[1] @ np.asarray(self._kind(drawer_id).part(Drawer).pull)
 
+    def _pulled(self, drawer_id: str) -> float:
+        """How far the drawer is out of where it stands shut (its place's recorded position)."""
+        shut = np.asarray(self.spec.object(drawer_id).pos)
+        return float((self.scene.object_pos(drawer_id) - shut) @ self._pull_direction(drawer_id))
+
     def pull_open(self, drawer_id: str, travel: float = DRAWER_PULL) -> None:
         """Take the drawer's handle bar from the front, the hand level and its fingers closing up and
-        down on the bar, and pull it `travel` out along its slide; let go and back off, up and out."""
+        down on the bar, and pull it `travel` out along its slide; let go and back off, up and out.
+        Nothing where it is out that far already (LIBERO-10's drawer starts open)."""
+        if self._pulled(drawer_id) >= travel:
+            return
         drawer = self._kind(drawer_id).part(Drawer)
         site, rot = self.scene.object_pos(drawer_id), self.scene.body_pose(drawer_id)[1]
         handle = site + rot @ np.asarray(drawer.handle)
@@ -131,3 +150,26 @@ class FurnitureSkills(Clearance):
         self.open()
         self.move_linear(self.scene.ee_pos() + 0.04 * out + [0.0, 0.0, 0.06], speed=0.2)
         self.facing = None  # the next move turns the hand down again
+
+    def push_closed(self, drawer_id: str) -> None:
+        """Push an open drawer shut: the closed fingers side by side, the hand pointing into the
+        cabinet SHUT_PITCH below level (pointing down, the hand would meet the cabinet over the
+        drawer; level, the wrist behind it the wine rack), from FRONT_GAP before where its front is
+        pressed (`Drawer.press`, beside its handle bar) in along its slide to SHUT_PAST beyond
+        where it stands shut; then back off, out and up. The hand comes down to it in front of the
+        drawer, clear of its front."""
+        out = self._pull_direction(drawer_id)
+        rot = self.scene.body_pose(drawer_id)[1]
+        press = self.scene.object_pos(drawer_id) + rot @ np.asarray(self._kind(drawer_id).part(Drawer).press)
+        level = facing(tuple(-out[:2]), np.pi / 2)
+        frame = turned(level[:, 0], SHUT_PITCH) @ level
+        start = press - FINGER_TIP * frame[:, 2] + FRONT_GAP * out
+        self.gripper = CLOSED
+        self.move_to([*self.scene.ee_pos()[:2], max(self.scene.ee_pos()[2], self.clearance())])
+        self.facing = frame
+        self.move_to(start + [0.0, 0.0, SHUT_BACK])
+        self.move_linear(start)
+        self.move_linear(start - (self._pulled(drawer_id) + FRONT_GAP + SHUT_PAST) * out, speed=SHUT_SPEED)
+        self.move_linear(self.scene.ee_pos() + SHUT_BACK * out, speed=0.2)
+        self.move_linear(self.scene.ee_pos() + [0.0, 0.0, SHUT_BACK], speed=0.2)
+        self.facing = None

@@ -125,9 +125,9 @@ class Skills(FurnitureSkills):
             over[:2] -= self.scene.object_pos(self.held[0])[:2] - self.scene.ee_pos()[:2]
         elif aside:  # and where the thing's origin does, the handle where it is on the thing standing (hanging, it swings)
             over[:2] += (yaw_matrix(self.scene.object_yaw(self.held[0])) @ np.asarray(held.handle))[:2]
-        release_z = contact.release_point(
-            self._kind(destination_id), self.scene.object_pos(destination_id), self._kind(self.held[0])
-        )[2]
+        destination = self._kind(destination_id)
+        release_z = contact.release_point(destination, self.scene.object_pos(destination_id), self._kind(self.held[0]))[2]
+        release_z += destination.drawer.drop if destination.drawer else 0.0
         over_all = self.clearance_along(over) if held.handle is not None else self.clearance()
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, over_all + self.held[1])
         over = self._within_reach(over, max(carry_z, release_z + RETREAT), destination_id)

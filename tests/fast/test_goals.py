@@ -93,3 +93,48 @@ def test_liberos_goal_for_a_region_of_the_table_is_on_it() -> None:
     )  # fmt: skip
     assert predicate(spec, start, "region", "place") == ["On", "chocolate_pudding_1", "living_room_table_plate_right_region"]
     assert predicate(spec, start, "basket", "place") == ["In", "chocolate_pudding_1", "basket_1_contain_region"]
+
+
+SHUT = (0.00328, 0.31128, 0.952)  # KITCHEN_SCENE4's bottom drawer's site, the drawer shut
+OPEN = (0.00328, 0.16528, 0.952)  # pulled 14.6 cm out, as LIBERO's initial states open it
+
+
+def _drawer_spec(shut: tuple = SHUT) -> EpisodeSpec:
+    """KITCHEN_SCENE4: the black bowl in the bottom drawer, then the drawer shut."""
+    objects = (
+        SceneObject("akita_black_bowl_1", "akita_black_bowl", "black bowl", 0, (0.03, -0.06, 0.898)),
+        SceneObject("white_bottom_drawer", "white_bottom_drawer", "bottom drawer", 1, shut),
+    )
+    then = [{"program": "close", "target": "white_bottom_drawer", "params": {}}]
+    task = TaskSpec("place_in", params={"object": "akita_black_bowl_1", THEN: then})
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_kitchen_scene4")
+    return EpisodeSpec("libero_10", 0, 0, objects, "white_bottom_drawer", "", "", (), (), task, setup)
+
+
+@pytest.mark.parametrize(
+    ("start", "end", "closed"),
+    [(OPEN, (0.00328, 0.31328, 0.952), True),  # pushed 2 mm past shut (LIBERO's joint at +0.002)
+     (OPEN, (0.00328, 0.31028, 0.952), False),  # 1 mm short of shut: LIBERO's joint at -0.001
+     (OPEN, OPEN, False),  # left open
+     ((0.00328, 0.30128, 0.952), (0.00328, 0.31328, 0.952), False)],  # it was not open to begin with
+)  # fmt: skip
+def test_a_drawer_is_closed_when_pushed_in_past_where_it_stands_shut(start: tuple, end: tuple, closed: bool) -> None:
+    """LIBERO's `Close(<drawer region>)`: its slide's joint above 0, the drawer pushed in past where it
+    stands shut (the spec records a drawer's place where it stands shut); only a drawer that started open."""
+    spec = _drawer_spec()
+    begin = {o.id: o.pos for o in spec.objects} | {"white_bottom_drawer": start}
+    outcome = Outcome(begin, {**begin, "white_bottom_drawer": end}, (0.0, 0.0, 1.0))
+    assert programs.each(spec, outcome)[1] is closed
+
+
+def test_liberos_goal_for_closing_a_drawer_is_close_of_its_region() -> None:
+    """What `sim=libero` asks LIBERO's `check_success` for a drawer shut, and for a thing put in it:
+    KITCHEN_SCENE4's BDDL words."""
+    spec = _drawer_spec()
+    start = RowStart("k", {}, {}, None, ("akita_black_bowl_1", "white_bottom_drawer"), ("akita_black_bowl_1",),
+                     ("white_cabinet_1_bottom_region",))  # fmt: skip
+    close, put_in = spec.goals()[1], spec.goals()[0]
+    assert predicate(close, start, "white_bottom_drawer", "close") == ["Close", "white_cabinet_1_bottom_region"]
+    assert predicate(put_in, start, "white_bottom_drawer", "place_in") == [
+        "In", "akita_black_bowl_1", "white_cabinet_1_bottom_region"
+    ]  # fmt: skip

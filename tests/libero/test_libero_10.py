@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from core import libero, programs, worlds
+from core.furniture import Spot
 from core.spec import FAST, LOOKS, THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
@@ -111,19 +112,24 @@ def test_the_same_pictures_at_liberos_own_initial_states(world: str, look: str, 
 # params)]). The pudding goes right of the plate before the mug goes on it (the mug's handle, over
 # the plate's edge, is where the pudding comes down); the moka pot goes on the stove before the
 # knob is turned (from the turned knob the hand's way to the pot sweeps the table); two moka pots go
-# on one burner side by side (`at`), the stove turned on first (a hand reaching the knob past them
-# knocks one off).
+# on one burner side by side (`at`). KITCHEN_SCENE8's goal is three, the stove on too, but every one
+# of its initial states has the knob on already (0.54-1.85 rad, LIBERO's `Turnon` from 0.5): its
+# goals here are the two pots (turned on again, a knob near its 2.1 stop moves too little for our
+# scorer, which judges a turn from where the knob started).
 POT_APART = 0.045  # m from the burner's centre, along x: the pots are 8.1 cm across, LIBERO's region 15
+# m from the basket's centre, along y: its box is 12.2 cm across, the cans 6.2 (the first at its centre, the
+# second stood on it, 7 of 10 in)
+CANS_APART = 0.03
 GOALS = {
     "LIVING_ROOM_SCENE1_put_both_the_alphabet_soup_and_the_cream_cheese_box_in_the_basket": (
         "libero_10_living_room", (),
         (("pick_place", "alphabet_soup_1", {"destination": "basket_1"}),
          ("pick_place", "cream_cheese_1", {"destination": "basket_1"})),
     ),
-    "LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket": (
+    "LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket": (  # two cans side by side
         "libero_10_living_room", (),
-        (("pick_place", "alphabet_soup_1", {"destination": "basket_1"}),
-         ("pick_place", "tomato_sauce_1", {"destination": "basket_1"})),
+        (("pick_place", "alphabet_soup_1", {"destination": "basket_1", "at": [0.0, CANS_APART]}),
+         ("pick_place", "tomato_sauce_1", {"destination": "basket_1", "at": [0.0, -CANS_APART]})),
     ),
     "LIVING_ROOM_SCENE5_put_the_white_mug_on_the_left_plate_and_put_the_yellow_and_white_mug_on_the_right_plate": (
         "libero_10_living_room", (),
@@ -139,10 +145,13 @@ GOALS = {
         "libero_10_kitchen_scene3", ("stove_knob", "stove_burner"),
         (("place", "stove_burner", {"object": "moka_pot_1"}), ("turn_on", "stove_knob", {})),
     ),
-    "KITCHEN_SCENE8_put_both_moka_pots_on_the_stove": (  # its goal is three: the stove on too
-        "libero_10_kitchen_scene8", ("stove_knob", "stove_burner"),
-        (("turn_on", "stove_knob", {}),
-         ("place", "stove_burner", {"object": "moka_pot_1", "at": [POT_APART, 0.0]}),
+    "KITCHEN_SCENE4_put_the_black_bowl_in_the_bottom_drawer_of_the_cabinet_and_close_it": (  # the drawer starts open
+        "libero_10_kitchen_scene4", ("white_bottom_drawer",),
+        (("place_in", "white_bottom_drawer", {"object": "akita_black_bowl_1"}), ("close", "white_bottom_drawer", {})),
+    ),
+    "KITCHEN_SCENE8_put_both_moka_pots_on_the_stove": (  # the stove, on already, is LIBERO's third goal
+        "libero_10_kitchen_scene8", ("stove_burner",),
+        (("place", "stove_burner", {"object": "moka_pot_1", "at": [POT_APART, 0.0]}),
          ("place", "stove_burner", {"object": "moka_pot_2", "at": [-POT_APART, 0.0]})),
     ),
 }  # fmt: skip
@@ -151,9 +160,9 @@ TWO_GOAL_STATES = 2
 
 def _goals_spec(task: str, state: int, scene: Scene, setup: Setup) -> tuple[EpisodeSpec, np.ndarray]:
     """A LIBERO-10 task at one of its initial states as a spec of its goals (GOALS): its objects
-    under their LIBERO names, where the state puts them, and the places on furniture it names; the
-    first goal the spec's target, the others in `task.params["then"]`. Returns the spec and the
-    physics state."""
+    under their LIBERO names, where the state puts them, and the places on furniture it names, where
+    they stand shut (the state opens a drawer); the first goal the spec's target, the others in
+    `task.params["then"]`. Returns the spec and the physics state."""
     problem, (_, sites, goals) = libero.problem(SUITE, task), GOALS[task]
     (program, target, params), *rest = goals
     then = [{"program": p, "target": t, "params": a} for p, t, a in rest]
@@ -163,10 +172,14 @@ def _goals_spec(task: str, state: int, scene: Scene, setup: Setup) -> tuple[Epis
         task=TaskSpec(program, params={**params, THEN: then}), setup=setup, split="exam",
     )  # fmt: skip
     vector = libero.initial_states(SUITE, task)[state]
+    scene.reset(spec)
+    shut = {s: tuple(map(float, scene.object_pos(s))) for s in sites}
     for _ in range(2):  # the second time every object is posed where the state puts it, as in the spec
         scene.reset(spec)
         scene.set_joints(*libero.split_state(vector, problem))
-        spec = replace(spec, objects=tuple(replace(o, pos=tuple(map(float, scene.object_pos(o.id)))) for o in objects))
+        spec = replace(
+            spec, objects=tuple(replace(o, pos=shut.get(o.id) or tuple(map(float, scene.object_pos(o.id)))) for o in objects)
+        )
     return spec, scene.physics_state()
 
 
@@ -195,23 +208,49 @@ def test_two_goals_done_in_turn_and_judged_each_as_libero_judges_them(tmp_path: 
             assert len(demo.actions) <= world.episode_steps, f"{task} state {state}: {len(demo.actions)} steps"
             ours.append(programs.each(spec, demo.outcome))
             asked.append((spec, demo.outcome))
-            cases.append({"task": task, "state": state, "actions": [hold.tolist()] * settle + demo.actions.tolist()})
+            actions = [hold.tolist()] * settle + demo.actions.tolist()
+            fixtures = [[f["instance"], *f["pos"], *f["quat"]] for f in spec.scene_record()["fixtures"]]
+            places = list(_places(spec).values())
+            cases.append({"task": task, "state": state, "actions": actions, "places": places, "fixtures": fixtures})
     theirs = json.loads(liberos_own("task_replay", {"suite": SUITE, "cases": cases}, tmp_path / "replay.json").read_text())
     liberos = [_in_our_order(spec, r["goals"]) for (spec, _), r in zip(asked, theirs)]
     # our scorer on where LIBERO's simulator left everything (the two simulators part where a can is
-    # let go onto another: in one it balances, in the other it falls out), as sim=libero judges a rollout
-    # (LIBERO reports its objects; the places on furniture keep where ours ended: the knob's turn is ours)
-    judged = [
-        programs.each(spec, Outcome(outcome.start, {**outcome.end, **{i: tuple(p) for i, *p in r["objects"]}}, outcome.ee))
-        for (spec, outcome), r in zip(asked, theirs)
-    ]
-    print("ours", ours, "LIBERO's", liberos, "ours on LIBERO's", judged)
+    # let go onto another: in one it balances, in the other it falls out), as sim=libero judges a
+    # rollout: its objects and the places on its furniture (a drawer's region, a point on the knob)
+    judged = []
+    for (spec, outcome), r in zip(asked, theirs):
+        ended = {i: tuple(r["places"][anchor]) for i, anchor in _places(spec).items()} | {i: tuple(p) for i, *p in r["objects"]}
+        judged.append(programs.each(spec, Outcome(outcome.start, ended, outcome.ee)))
+    print("ours", ours, "LIBERO's", liberos, "ours on LIBERO's", judged, "LIBERO's joints", [r["joints"] for r in theirs])
     assert judged == liberos, "our scorer and LIBERO's predicates judge the goals differently"
     assert [r["success"] for r in theirs] == [all(g) for g in liberos]
     assert sum(all(g) for g in ours) >= len(ours) - 1, f"every goal reached in {ours}"
-    # LIBERO's simulator parts from ours where a pot or a can is let down (it stands off the burner
-    # in LIBERO's where it stands on it in ours): 10 of 12 measured
+    # LIBERO's simulator parts from ours where a mug or a can is let down (at states 0-9: 67 of 70
+    # replays reached every goal, docs/LIBERO.md)
     assert sum(all(g) for g in liberos) >= 0.8 * len(liberos), f"every goal reached in LIBERO's {liberos}"
+
+
+def test_a_bowl_put_in_the_open_drawer_and_the_drawer_pushed_shut() -> None:
+    """KITCHEN_SCENE4 from LIBERO's own initial state 0, which leaves the white cabinet's bottom drawer
+    open 14.6 cm: the oracle lets the bowl down into it (not pulling it further) and pushes it shut
+    past where it stands shut; our scorer judges both goals done, the drawer no longer open."""
+    task = next(t for t in GOALS if t.startswith("KITCHEN_SCENE4"))
+    world = worlds.world(GOALS[task][0])
+    setup = world_setup(world)
+    scene, ik = scene_for(_inventory(task), setup.profile, world.name), ArmIK(np.asarray(world.robot_home), world.name)
+    spec, physics = _goals_spec(task, 0, scene, setup)
+    drawer = spec.target
+    assert np.linalg.norm(np.subtract(scene.object_pos(drawer), spec.object(drawer).pos)) > 0.14, "the state opens it"
+    demo = demonstrate(scene, ik, spec, programs.perform, physics, setup.interface.settle_steps)
+    assert demo.outcome is not None, demo.failure
+    assert programs.each(spec, demo.outcome) == (True, True)
+    assert len(demo.actions) <= world.episode_steps
+
+
+def _places(spec: EpisodeSpec) -> dict[str, str]:
+    """The spec's places on furniture: id -> where LIBERO's simulator finds it (`Spot.anchor`)."""
+    kinds = {o.id: worlds.kind(o.kind, spec.setup.world) for o in spec.objects}
+    return {i: k.part(Spot).anchor for i, k in kinds.items() if k.is_site}
 
 
 def _in_our_order(spec: EpisodeSpec, goals: list) -> tuple[bool, ...]:
@@ -223,5 +262,5 @@ def _in_our_order(spec: EpisodeSpec, goals: list) -> tuple[bool, ...]:
     for goal in spec.goals():
         params, kind = goal.task.params, worlds.kind(goal.object(goal.target).kind, goal.setup.world)
         moves = params.get("object", goal.target if "destination" in params else None)
-        found.append(verdicts[moves or libero.place_name(kind, goal.target)])
+        found.append(verdicts[moves or libero.place_name(kind, kind.part(Spot).anchor)])
     return tuple(found)

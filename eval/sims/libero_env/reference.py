@@ -28,12 +28,15 @@ Commands (the request is JSON; what comes back is written to <out>):
   action and each object's final position. With a `"suite"` (a table suite: libero_spatial,
   libero_goal) the problem is instead that suite's own table and fixtures holding the request's
   objects, with goal `(On <target> <container>)`, its fixtures posed as the request's `fixtures` say.
-* `task_replay` — {"suite", "cases": [{"task", "state", "actions"}, ...]}: each case's actions
-  stepped in LIBERO's environment of the suite's task (its own BDDL file) from its initial state
-  number `state`; <out> (.json) gets per case `check_success()` after the last action, each of
-  the task's goal predicates (`goals`: [[predicate words], true or false], LIBERO's order) and
-  each object's final position: a demonstration made from LIBERO's own initial state judged
-  goal by goal as LIBERO judges it.
+* `task_replay` — {"suite", "cases": [{"task", "state", "actions", "places", "fixtures"}, ...]}: each
+  case's actions stepped in LIBERO's environment of the suite's task (its own BDDL file) from its
+  initial state number `state`, its fixtures standing where `fixtures` says ([name, x, y, z, qw, qx,
+  qy, qz], as the exam's scene stands them; LIBERO draws them anew at each reset); <out> (.json)
+  gets per case `check_success()` after the last action, each of the task's goal predicates
+  (`goals`: [[predicate words], true or false], LIBERO's order), each object's final position, the
+  fixtures' joints and poses, and where the places named in `places` ended (their anchors: a region
+  site, a drawer's moving with it, or a point of a body, the knob's turning with it): a
+  demonstration made from LIBERO's own initial state judged goal by goal as LIBERO judges it.
 * `scenes` — `replay`'s request (actions unused) and `"size"`: LIBERO's frames at each episode's
   recorded initial state, as `render` writes them for LIBERO's own initial states (keys `<k>-...`
   for the k-th episode): generated scenes compared picture for picture.
@@ -63,12 +66,14 @@ from pathlib import Path
 import numpy as np
 
 from eval.sims.libero_env.server import (
+    anchored,
     articulations,
     fixtures,
     floor_bddl,
     make_env,
     pose_from_record,
     positions,
+    stand_fixtures,
     table_bddl,
     task_bddl,
 )
@@ -219,6 +224,7 @@ def task_replay(request: dict, out: str) -> None:
             envs[case["task"]] = (make_env(bddl, 32, cameras=False), states)
         env, states = envs[case["task"]]
         env.reset()
+        stand_fixtures(env, case.get("fixtures", []))  # where our scene stands them, as sim=libero does
         env.set_init_state(states[case["state"]])
         for action in case["actions"]:
             env.step(np.asarray(action, float))
@@ -227,6 +233,9 @@ def task_replay(request: dict, out: str) -> None:
             "success": bool(env.check_success()),
             "goals": [[list(g), bool(env.env._eval_predicate(g))] for g in goals],
             "objects": positions(env),
+            "joints": articulations(env),
+            "fixtures": fixtures(env),
+            "places": {name: anchored(env.sim.model, env.sim.data, name).tolist() for name in case.get("places", ())},
         })  # fmt: skip
     for env, _ in envs.values():
         env.close()
