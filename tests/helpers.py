@@ -22,7 +22,7 @@ from core.exam import FACES, Exam, read
 from core.profiles import LIBERO, NATIVE
 from core.spec import FAST, EpisodeSpec, SceneObject, Setup
 from core.worlds import World
-from eval.sims.libero import in_liberos
+from eval.sims.libero import fixture_poses, in_liberos
 from eval.sims.libero_env.reference import named, object_differences  # the same readout in the tests and the pictures in docs/
 from gen.config import parse
 from gen.planning.plan import world_setup
@@ -322,7 +322,7 @@ def liberos_replay(dataset: Path, world: World) -> dict:
         episodes.append(episode)
     if not world.fixtures:
         return {"episodes": episodes}
-    fixtures = {tuple([f["instance"], *f["pos"], *f["quat"]]) for r in records.scene for f in json.loads(r)["fixtures"]}
+    fixtures = {tuple(pose) for r in records.scene for pose in fixture_poses(json.loads(r))}
     assert len(fixtures) == len(world.fixtures), "every record names every fixture, at one pose"
     return {"suite": world.suite, "fixtures": [list(f) for f in sorted(fixtures)], "episodes": episodes}
 

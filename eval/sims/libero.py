@@ -130,6 +130,13 @@ def _observing() -> str:
     return ", ".join(n for n in names() if n.partition(":")[0] not in PRIVILEGED)
 
 
+def fixture_poses(record: dict) -> list[list]:
+    """Where a scene record stands its fixtures, as LIBERO's environment is asked to stand them
+    ([name, x, y, z, qw, qx, qy, qz]: eval/sims/libero_env/server.py `stand_fixtures`); LIBERO's own
+    reset draws them anew within their regions."""
+    return [[f["instance"], *f["pos"], *f["quat"]] for f in record["fixtures"]]
+
+
 @dataclass(frozen=True)
 class RowStart:
     """How one row starts in LIBERO: the environment (`key`, and its BDDL file or text), the initial
@@ -176,7 +183,7 @@ class Rows:
         if self.suite:
             task, state = self.cases[spec.index]
             bddl = {"bddl": str(libero.benchmark_root() / "bddl_files" / self.suite / f"{task}.bddl")}
-            fixtures = {"fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in spec.scene_record()["fixtures"]]}
+            fixtures = {"fixtures": fixture_poses(spec.scene_record())}
             return RowStart(
                 f"{self.suite}/{task}", bddl, fixtures, libero.initial_states(self.suite, task)[state], ids, objects, sites
             )
@@ -185,7 +192,7 @@ class Rows:
             "arm": record["robot"]["arm"],
             "fingers": record["robot"]["fingers"],
             "objects": [{k: o[k] for k in ("instance", "pos", "quat")} for o in record["objects"] if o["instance"] in objects],
-            "fixtures": [[f["instance"], *f["pos"], *f["quat"]] for f in record["fixtures"]],
+            "fixtures": fixture_poses(record),
         }
         return RowStart(f"{self.world.name}/exam", {"bddl_text": self._problem()}, pose, None, ids, objects, sites)
 

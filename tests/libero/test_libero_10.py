@@ -17,6 +17,7 @@ from core import libero, programs, worlds
 from core.furniture import Spot
 from core.spec import FAST, LOOKS, THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome
+from eval.sims.libero import fixture_poses
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
 from gen.planning.plan import world_setup
 from helpers import PICTURE_STATES, initial_state_pictures, liberos_own, same_physics
@@ -209,8 +210,7 @@ def test_two_goals_done_in_turn_and_judged_each_as_libero_judges_them(tmp_path: 
             ours.append(programs.each(spec, demo.outcome))
             asked.append((spec, demo.outcome))
             actions = [hold.tolist()] * settle + demo.actions.tolist()
-            fixtures = [[f["instance"], *f["pos"], *f["quat"]] for f in spec.scene_record()["fixtures"]]
-            places = list(_places(spec).values())
+            places, fixtures = list(_places(spec).values()), fixture_poses(spec.scene_record())
             cases.append({"task": task, "state": state, "actions": actions, "places": places, "fixtures": fixtures})
     theirs = json.loads(liberos_own("task_replay", {"suite": SUITE, "cases": cases}, tmp_path / "replay.json").read_text())
     liberos = [_in_our_order(spec, r["goals"]) for (spec, _), r in zip(asked, theirs)]

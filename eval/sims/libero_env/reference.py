@@ -34,7 +34,7 @@ Commands (the request is JSON; what comes back is written to <out>):
   qy, qz], as the exam's scene stands them; LIBERO draws them anew at each reset); <out> (.json)
   gets per case `check_success()` after the last action, each of the task's goal predicates
   (`goals`: [[predicate words], true or false], LIBERO's order), each object's final position, the
-  fixtures' joints and poses, and where the places named in `places` ended (their anchors: a region
+  fixtures' joints, and where the places named in `places` ended (their anchors: a region
   site, a drawer's moving with it, or a point of a body, the knob's turning with it): a
   demonstration made from LIBERO's own initial state judged goal by goal as LIBERO judges it.
 * `scenes` — `replay`'s request (actions unused) and `"size"`: LIBERO's frames at each episode's
@@ -234,7 +234,6 @@ def task_replay(request: dict, out: str) -> None:
             "goals": [[list(g), bool(env.env._eval_predicate(g))] for g in goals],
             "objects": positions(env),
             "joints": articulations(env),
-            "fixtures": fixtures(env),
             "places": {name: anchored(env.sim.model, env.sim.data, name).tolist() for name in case.get("places", ())},
         })  # fmt: skip
     for env, _ in envs.values():
