@@ -32,7 +32,9 @@ Columns of answers.parquet (the scorer's side), one row per rollout too:
   object asked for), program (str: pick | push | place), original_target (str),
   original_program (str), spec (JSON: the trial's full episode spec), scene_hash (str),
   alternatives (JSON: `[{"target", "program"}]`, the original first: what the instruction
-  chooses among), slot (int: slot of the object asked for), value (str: what the instruction
+  chooses among; in a task of more goals than one, LIBERO-10's, an alternative renaming another
+  goal than the first says which, `"goal": k`, and is achieved when that goal is done of it and
+  every other goal as asked), slot (int: slot of the object asked for), value (str: what the instruction
   calls it), initial_ee (list[float]: the end effector's position in the initial state),
   settled_start (JSON: {"ee": [x, y, z], "objects": {id: [x, y, z]}} after the profile's settle
   steps, where `reset()` of the gymnasium env leaves them; only where the profile has settle
@@ -65,7 +67,7 @@ import pyarrow.parquet as pq
 from core import __version__, contact, parquet, profiles, success, worlds
 from core.products import ANSWERS_FILE, EXAM_PATH, TRIALS_FILE
 from core.profiles import ACTION_KEY, NATIVE, STATE_KEY
-from core.spec import EpisodeSpec, SpecError
+from core.spec import Counterfactual, EpisodeSpec, SpecError
 
 EXAM_FORMAT = "deconfound-exam"
 EXAM_VERSION = 2
@@ -143,6 +145,19 @@ class Switch:
     step: int  # the first step the policy is shown the new instruction
 
 
+def alternative(spec: EpisodeSpec, cf: Counterfactual) -> dict[str, Any]:
+    """A counterfactual as the answers' `alternatives` list it: what it asks for, and which goal of
+    a task of more it renames (`goal`, only where not the first: exams before it have none)."""
+    target, program = spec.choice(cf)
+    return {"target": target, "program": program, **({"goal": cf.goal} if cf.goal else {})}
+
+
+def goal_of(alternatives: list[dict[str, Any]], target: str, program: str) -> int:
+    """The goal of a task of more that a row asking `program` of `target` renames (0: the first, or
+    a task of one goal), read from its trial's `alternatives`."""
+    return next((int(a.get("goal", 0)) for a in alternatives if (a["target"], a["program"]) == (target, program)), 0)
+
+
 def switch_choices(trial: int, spec: EpisodeSpec, switches: int) -> list[int]:
     """The counterfactuals a trial's `switches` switch rows name: the next ones in turn from the
     trial's number, so across trials every alternative is switched to as often."""
@@ -171,7 +186,7 @@ def trial_rows(
     objects = {o.id for o in spec.objects}
     values = {((i, spec.task.program) if i in objects else (spec.target, i)): v for i, v in values_by_id.items()}
     original = {"target": spec.target, "program": spec.task.program}
-    alternatives = [original] + [{"target": t, "program": p} for t, p in (spec.choice(c) for c in spec.counterfactuals)]
+    alternatives = [original] + [alternative(spec, c) for c in spec.counterfactuals]
     common = {
         "trial": trial,
         "original_target": spec.target,

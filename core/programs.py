@@ -153,14 +153,15 @@ def perform(skills: Skills, spec: EpisodeSpec) -> None:
         named(goal.task.program).perform(skills, goal)
 
 
-def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str) -> bool:
-    """Did the rollout do `program` to `target` (the episode's ask, or a counterfactual's)?"""
-    return named(program).judge(spec, outcome, target)
+def achieved(spec: EpisodeSpec, outcome: Outcome, target: str, program: str, goal: int = 0) -> bool:
+    """Did the rollout do `program` to `target` (the episode's ask, or a counterfactual's), as the
+    task's goal number `goal`, and every other goal of the task as asked?"""
+    return all(each(spec.asking(target, program, goal), outcome))
 
 
 def each(spec: EpisodeSpec, outcome: Outcome) -> tuple[bool, ...]:
     """Whether the rollout reached each of the task's goals (one, or LIBERO-10's two or three)."""
-    return tuple(achieved(goal, outcome, *goal.choice()) for goal in spec.goals())
+    return tuple(named(g.task.program).judge(g, outcome, g.target) for g in spec.goals())
 
 
 def succeeded(spec: EpisodeSpec, outcome: Outcome) -> bool:

@@ -49,12 +49,15 @@ class Counterfactual:
 
     `target` is the object the changed instruction names; `program` is set when the change
     names another motor program (e.g. "lift" -> "push") and is None when it keeps the episode's.
+    `goal` is which of a task of more goals (LIBERO-10's) the changed words name: 0 the first (the
+    episode's target), k the k-th that `task.params["then"]` lists; the others stay as asked.
     """
 
     instruction: str
     target: str
     changed: tuple[str, str]
     program: str | None = None
+    goal: int = 0
 
 
 THEN = "then"  # a task's goals after its first, in its params: [{"program", "target", "params"}, ...] (EpisodeSpec.goals)
@@ -137,6 +140,15 @@ class EpisodeSpec:
             return self.target, self.task.program
         return cf.target, cf.program or self.task.program
 
+    def asking(self, target: str, program: str, goal: int = 0) -> EpisodeSpec:
+        """The episode with its goal number `goal` (0 the first) asking `program` of `target`
+        instead, its other goals as they are: what a counterfactual of it asks in all."""
+        if goal == 0:
+            return replace(self, target=target, task=replace(self.task, program=program))
+        then = [dict(g) for g in self.task.params[THEN]]
+        then[goal - 1].update(target=target, program=program)
+        return replace(self, task=replace(self.task, params={**self.task.params, THEN: then}))
+
     def goals(self) -> tuple[EpisodeSpec, ...]:
         """The task's goals in the order the oracle reaches them, each as a spec of one goal: itself,
         or for a task of more (LIBERO-10's "put both ...", "... and close it") the first, then each
@@ -183,6 +195,9 @@ class EpisodeSpec:
             del d["sim"]["look"]
         if self.switch is None:  # and those whose instruction never changes
             del d["switch"]
+        for cf in d["counterfactuals"]:  # and counterfactuals naming a task's first goal, which is all there was before `goal`
+            if cf["goal"] == 0:
+                del cf["goal"]
         return d
 
     def to_json(self) -> str:
@@ -241,6 +256,9 @@ class EpisodeSpec:
             switch = d.get("switch")
             if switch is not None and not 0 <= int(switch) < len(d["counterfactuals"]):
                 raise SpecError(f"episode spec's switch {switch} names no counterfactual (it has {len(d['counterfactuals'])})")
+            goals = 1 + len(d["task"].get("params", {}).get(THEN) or ())
+            if any(not 0 <= int(c.get("goal", 0)) < goals for c in d["counterfactuals"]):
+                raise SpecError(f"an episode spec's counterfactual names a goal its task does not have (it has {goals})")
             return cls(
                 referent=str(d["referent"]),
                 index=int(d["index"]),
@@ -261,7 +279,7 @@ class EpisodeSpec:
                 instruction=str(d["instruction"]),
                 template=str(d["template"]),
                 counterfactuals=tuple(
-                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]), c.get("program"))
+                    Counterfactual(c["instruction"], c["target"], tuple(c["changed"]), c.get("program"), int(c.get("goal", 0)))
                     for c in d["counterfactuals"]
                 ),
                 assets=tuple((str(k), int(n)) for k, n in d["assets"]),

@@ -29,7 +29,7 @@ import numpy as np
 from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from core.exam import SWITCH, Exam, read
+from core.exam import SWITCH, Exam, goal_of, read
 from core.profiles import STATE_KEY
 from core.programs import achieved
 from core.spec import EpisodeSpec
@@ -115,7 +115,8 @@ class ExamEnv(gym.Env):
         self.scene.step(valid)
         self._t += 1
         outcome = Outcome(self._start, self.scene.positions(), tuple(self.scene.ee_pos()), self.scene.turns())
-        done = achieved(self.episode, outcome, self.row["target"], self.row["program"])
+        asked = (self.row["target"], self.row["program"])
+        done = achieved(self.episode, outcome, *asked, goal_of(json.loads(self.row["alternatives"]), *asked))
         info = {**self._info(), "achieved": done}
         return self._obs(), float(done), False, self._t >= int(self.row["max_steps"]), info
 

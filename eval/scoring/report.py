@@ -113,6 +113,12 @@ def how_to_read(report: dict) -> list[str]:
     lines += [f"- `{f}`: {FACE_MEANINGS[f]}." for f in FACE_ORDER if f in faces]
     if report.get("sim_success"):
         lines.append("- `..., by the simulator's own check`: the same ask judged by the simulator's own predicates, not ours.")
+    if "partial" in report:
+        done = ", ".join(f"{k}: {n}" for k, n in report["partial"]["done"].items())
+        lines.append(
+            "- `task, goal k`: the task's goals one by one (the task counts a rollout that does them all); the task rows "
+            f"by the goals they did ({done}; `1+2` both, `none` neither)."
+        )
     if "grounding" in report:
         lines.append("- grounding: swap rows whose first-frame guess of where the named object stands is nearest it.")
     if any(key in PREDICTION_ROWS for key in report.get("prediction", {})):
@@ -180,6 +186,9 @@ def markdown(report: dict) -> str:
     ]
     for face, judged in report.get("sim_success", {}).items():
         lines.append(f"| {face}, by the simulator's own check | {_pct(judged)} | {_trials_ci(judged)} | — | — |")
+    for k, each in enumerate(report.get("partial", {}).get("each", []), start=1):
+        of = report["partial"]["goals"]
+        lines.append(f"| task, goal {k} of {of} (done, whatever the others) | {_pct(each)} | {_trials_ci(each)} | — | — |")
     if "grounding" in report:
         g = report["grounding"]
         lines.append(

@@ -7,7 +7,7 @@ these functions.
 from __future__ import annotations
 
 import json
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from core import contact, programs, worlds
-from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, decode_objects
+from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, decode_objects, goal_of
 from core.products import EXAM_PATH
 from core.programs import achieved
 from core.rates import Rate, against_chance, cluster_ci
@@ -60,11 +60,14 @@ def judge(
         tuple(ee[end]),
         {k: tuple(v[end]) for k, v in (turns or {}).items()},
     )
-    alternatives = [(a["target"], a["program"]) for a in json.loads(row["alternatives"])]
+    listed = json.loads(row["alternatives"])
+    alternatives = [(a["target"], a["program"]) for a in listed]
     result = {}
     for alt in alternatives + landable(spec, alternatives):
-        distances = contact_distance(spec, {k: v[: end + 1] for k, v in objects.items()}, *alt, ee[: end + 1])
-        result[alt] = {"achieved": achieved(spec, outcome, *alt), "distance": float(np.min(distances))}
+        goal = goal_of(listed, *alt)
+        aimed = spec.asking(*alt, goal).goals()[goal]  # a task of more goals: the renamed goal's motion is the landing
+        distances = contact_distance(aimed, {k: v[: end + 1] for k, v in objects.items()}, *alt, ee[: end + 1])
+        result[alt] = {"achieved": achieved(spec, outcome, *alt, goal), "distance": float(np.min(distances))}
     return result
 
 
@@ -239,6 +242,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
     unmapped = 0
     verdicts = _verdicts(logs)  # the simulator's own judgement of each row's ask (sim=libero), where logged
     judged_by_sim: dict[str, list[tuple[float, int]]] = defaultdict(list)
+    partial: list[tuple[list[bool], int]] = []  # task rows of a task of more goals: each goal done, and the trial
     errors = []
     for _, row in exam.trials.iterrows():
         ee, objects, error, located, predicted, turns = parsed[int(row["row"])]
@@ -275,6 +279,9 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             count("switch_blind", original, "5cm")
         else:
             ok = count(face, asked, "achieved")
+            goals = _goals_done(row, ee, objects, turns)
+            if face == "task" and len(goals) > 1:
+                partial.append(([g and not error for g in goals], trial))
         if predicted is not None and face in PREDICTED_FACES:
             if row[FRAME_OBJECTS] is None:
                 unmapped += 1
@@ -328,6 +335,8 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
         report["prediction_trained"] = logs.attrs["prediction_trained"]
     if judged_by_sim:
         report["sim_success"] = {face: clustered_rate(*zip(*entries)) for face, entries in judged_by_sim.items()}
+    if partial:
+        report["partial"] = _partial(partial)
     if grounding:
         hits, trials, chances = zip(*grounding)
         report["grounding"] = {**clustered_rate(hits, trials), "chance": round(float(np.mean(chances)), 4)}
@@ -342,6 +351,28 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             f"(answers.parquet {FRAME_OBJECTS}: made before the prediction face); make the exam again to score them"
         }
     return report
+
+
+def _goals_done(row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], turns: dict[str, np.ndarray]) -> tuple:
+    """Each goal of the row's task, done at the rollout's end or not (one entry for a task of one goal)."""
+    spec = EpisodeSpec.from_json(row["spec"])
+    if len(spec.goals()) == 1:
+        return (None,)
+    start, end = {k: tuple(v[0]) for k, v in objects.items()}, {k: tuple(v[-1]) for k, v in objects.items()}
+    return programs.each(spec, Outcome(start, end, tuple(ee[-1]), {k: tuple(v[-1]) for k, v in turns.items()}))
+
+
+def _partial(entries: list[tuple[list[bool], int]]) -> dict:
+    """The partial face of a task of more goals (LIBERO-10's): each goal's rate on the task rows
+    (clustered by trial), and how many rollouts did which of them (`done`: "1+2" both, "1" the
+    first only, "none" neither)."""
+    done, trials = zip(*entries)
+    patterns = Counter("+".join(str(k + 1) for k, ok in enumerate(d) if ok) or "none" for d in done)
+    return {
+        "goals": len(done[0]),
+        "each": [clustered_rate([float(d[k]) for d in done], trials) for k in range(len(done[0]))],
+        "done": dict(sorted(patterns.items())),
+    }
 
 
 def predicted_on(row: pd.Series, point: np.ndarray, size: int) -> tuple[str | None, int]:

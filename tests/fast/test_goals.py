@@ -4,12 +4,20 @@ Positions alone, no simulator."""
 
 from __future__ import annotations
 
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
 import pytest
 
 from core import programs
+from core.exam import Exam, trial_rows
 from core.profiles import LIBERO
-from core.spec import THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
+from core.spec import THEN, Counterfactual, EpisodeSpec, SceneObject, Setup, SpecError, TaskSpec
 from core.success import Outcome
+from eval.scoring.score import score
 from eval.sims.libero import RowStart, predicate
 
 BASKET = (0.0, 0.27, 0.432)  # LIVING_ROOM_SCENE1's basket, at rest
@@ -17,6 +25,7 @@ SOUP, CHEESE = (-0.1, -0.15, 0.475), (0.08, -0.19, 0.445)
 IN_BASKET = (0.0, 0.27, 0.47)  # a grocery's origin inside the basket's box
 PUDDING = (-0.05, 0.1, 0.45)
 RIGHT_OF_PLATE = (0.15, 0.1, 0.41)  # the table's region right of the plate (its site)
+SAUCE = (0.1, -0.05, 0.46)
 
 
 def _spec() -> EpisodeSpec:
@@ -138,3 +147,67 @@ def test_liberos_goal_for_closing_a_drawer_is_close_of_its_region() -> None:
     assert predicate(put_in, start, "white_bottom_drawer", "place_in") == [
         "In", "akita_black_bowl_1", "white_cabinet_1_bottom_region"
     ]  # fmt: skip
+
+
+def _swapped() -> EpisodeSpec:
+    """LIVING_ROOM_SCENE1 with the tomato sauce beside, and the swap of its second name: "put both
+    the alphabet soup and the tomato sauce in the basket"."""
+    spec = _spec()
+    sauce = SceneObject("tomato_sauce_1", "tomato_sauce", "tomato sauce", 3, SAUCE)
+    cf = Counterfactual("put both the alphabet soup and the tomato sauce in the basket", "tomato_sauce_1",
+                        ("cream cheese", "tomato sauce"), goal=1)  # fmt: skip
+    instruction = "put both the alphabet soup and the cream cheese box in the basket"
+    return replace(spec, objects=(*spec.objects, sauce), instruction=instruction, counterfactuals=(cf,))
+
+
+@pytest.mark.parametrize(
+    ("moved", "task", "swap"),
+    [({"alphabet_soup_1": IN_BASKET, "cream_cheese_1": IN_BASKET}, True, False),
+     ({"alphabet_soup_1": IN_BASKET, "tomato_sauce_1": IN_BASKET}, False, True),
+     ({"tomato_sauce_1": IN_BASKET}, False, False)],
+)  # fmt: skip
+def test_a_swap_of_the_second_name_asks_the_first_goal_as_it_was(moved: dict, task: bool, swap: bool) -> None:
+    """A counterfactual renames one goal of the two (`goal`); it is achieved when that goal is done of
+    the newly named object and the other goal as first asked."""
+    spec = _swapped()
+    start = {o.id: o.pos for o in spec.objects}
+    outcome = Outcome(start, {**start, **moved}, (0.0, 0.0, 1.0))
+    assert programs.achieved(spec, outcome, spec.target, spec.task.program) is task
+    assert programs.achieved(spec, outcome, *spec.choice(spec.counterfactuals[0]), spec.counterfactuals[0].goal) is swap
+
+
+def test_a_counterfactuals_goal_is_written_only_where_not_the_first() -> None:
+    """Specs whose counterfactuals rename the first goal keep the JSON (and hash) they had before
+    `goal`; one naming a goal the task does not have is refused."""
+    spec = _swapped()
+    assert json.loads(spec.to_json())["counterfactuals"][0]["goal"] == 1
+    assert EpisodeSpec.from_json(spec.to_json()) == spec
+    first = replace(spec, counterfactuals=(replace(spec.counterfactuals[0], goal=0),))
+    assert "goal" not in json.loads(first.to_json())["counterfactuals"][0]
+    beyond = json.loads(spec.to_json())
+    beyond["counterfactuals"][0]["goal"] = 2
+    with pytest.raises(SpecError, match="goal"):
+        EpisodeSpec.from_dict(beyond)
+
+
+def test_the_partial_face_counts_each_goal_of_the_task_rows() -> None:
+    """Scored from logs: a task row that put only the soup in did its first goal and not the task; a
+    swap row that put the soup and the sauce in obeyed the swap of the second name."""
+    spec = _swapped()
+    rows = trial_rows(0, spec, {}, [], 10, [0.0, 0.0, 1.0])
+    for i, r in enumerate(rows):
+        r["row"] = i
+    exam = Exam(Path("."), {"referent": "libero_10", "trials": 1, "seed": 0}, pd.DataFrame(rows))
+    ends = {"task": {"alphabet_soup_1": IN_BASKET}, "swap": {"alphabet_soup_1": IN_BASKET, "tomato_sauce_1": IN_BASKET}}
+    logs = []
+    for r in rows:
+        start = {o.id: o.pos for o in spec.objects}
+        end = {**start, **ends.get(r["face"], {})}
+        hand = end.get(r["target"], (0.0, 0.0, 1.0)) if r["face"] in ends else (0.0, 0.0, 1.0)
+        objects = json.dumps({k: [list(start[k]), list(end[k])] for k in start})
+        logs.append({"row": r["row"], "ee": [[0.0, 0.0, 1.0], list(np.add(hand, (0.0, 0.0, 0.05)))], "objects": objects,
+                     "error": None})  # fmt: skip
+    report = score(exam, pd.DataFrame(logs), "scripted")
+    assert report["faces"]["task"]["k"] == 0 and report["faces"]["swap_success"]["k"] == 1
+    assert report["partial"]["goals"] == 2 and report["partial"]["done"] == {"1": 1}
+    assert [e["k"] for e in report["partial"]["each"]] == [1, 0]
