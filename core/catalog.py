@@ -71,6 +71,9 @@ class Kind:
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
     neck: bool = False  # held by a narrow neck (a bottle): it swings, so it is carried gently (oracle/motion.py GENTLE)
+    # where two things brought to it stand (LIBERO-10's "put both ..."): this far (x, y) from its centre,
+    # the first one way, the second the other (core/libero_goals.py); None: both at its centre
+    side_by_side: tuple[float, float] | None = None
     spot: Spot | None = None  # a place on a fixture: where it is
     drawer: Drawer | None = None
     knob: Knob | None = None

@@ -134,6 +134,9 @@ class World:
     table_friction: tuple[float, float, float] = (0.6, 0.005, 0.0001)
     fixtures: tuple[Placed, ...] = ()  # furniture in every scene of the world, never moved
     suite: str = ""  # the LIBERO benchmark suite whose BDDL problems lay the world's scenes out
+    # LIBERO's scenes the world stands, by the start of their tasks' names, where one suite's tasks span
+    # several worlds (LIBERO-10's kitchens, living room and study: `standing`)
+    scenes: tuple[str, ...] = ()
     robot_faces: int = 2000  # the robot's visual meshes are decimated to this many triangles each (oracle/meshes.py)
     episode_steps: int = 0  # the steps an evaluation of the suite allows (lerobot's LIBERO env), after its settle steps
     body_name: Callable[[str, int], str] = _numbered  # the model's name for the i-th (from 0) body of a kind
@@ -168,6 +171,14 @@ def world(name: str) -> World:
         return worlds[name]
     except KeyError:
         raise UnknownWorld(f"unknown world {name!r}; known: {', '.join(worlds)}") from None
+
+
+def standing(task: str) -> World:
+    """The world that stands a LIBERO task's scene, where a world says which scenes it stands (`scenes`)."""
+    found = [w for w in _worlds().values() if task.startswith(w.scenes)] if task else []
+    if len(found) != 1:
+        raise UnknownWorld(f"{len(found) or 'no'} world(s) stand the scene of task {task!r}")
+    return found[0]
 
 
 def kind(name: str, world_name: str = "native") -> Kind:

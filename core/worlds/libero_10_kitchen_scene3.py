@@ -38,5 +38,6 @@ KITCHEN = replace(
 WORLD = replace(
     KITCHEN,
     name="libero_10_kitchen_scene3",
+    scenes=("KITCHEN_SCENE3_",),
     fixtures=(Placed(libero.FIXTURES["flat_stove"], "flat_stove_1", (-0.2, 0.2, libero_spatial.FIXTURE_Z)),),
 )

@@ -20,6 +20,7 @@ from core.worlds.libero_10_kitchen_scene3 import KITCHEN
 WORLD = replace(
     KITCHEN,
     name="libero_10_kitchen_scene4",
+    scenes=("KITCHEN_SCENE4_",),
     fixtures=(
         Placed(libero.FIXTURES["white_cabinet"], "white_cabinet_1", (0.0, 0.3, libero_spatial.FIXTURE_Z)),
         Placed(libero.FIXTURES["wine_rack"], "wine_rack_1", (-0.1, -0.3, 0.92), float(np.pi)),

@@ -18,5 +18,6 @@ from core.worlds.libero_10_kitchen_scene3 import KITCHEN
 WORLD = replace(
     KITCHEN,
     name="libero_10_kitchen_scene6",
+    scenes=("KITCHEN_SCENE6_",),
     fixtures=(Placed(libero.FIXTURES["microwave"], "microwave_1", (0.0, 0.35, 0.92)),),
 )

@@ -16,5 +16,6 @@ from core.worlds.libero_10_kitchen_scene3 import KITCHEN
 WORLD = replace(
     KITCHEN,
     name="libero_10_kitchen_scene8",
+    scenes=("KITCHEN_SCENE8_",),
     fixtures=(Placed(libero.FIXTURES["flat_stove"], "flat_stove_1", (-0.2, -0.2, libero_spatial.FIXTURE_Z)),),
 )

@@ -21,6 +21,7 @@ from core.worlds.libero_10_kitchen_scene3 import KITCHEN
 WORLD = replace(
     KITCHEN,
     name="libero_10_living_room",
+    scenes=("LIVING_ROOM_SCENE1_", "LIVING_ROOM_SCENE2_", "LIVING_ROOM_SCENE5_", "LIVING_ROOM_SCENE6_"),
     surface_z=0.43676,  # the top of the table's collision boxes (LIBERO's offset says 0.41)
     robot_base=(-0.51, 0.0, 0.42),  # OnTheGroundPanda.base_xpos_offset["living_room_table"](0.7)
     agentview=Camera(

@@ -27,6 +27,7 @@ DESK_TOP = 0.88513
 WORLD = replace(
     KITCHEN,
     name="libero_10_study",
+    scenes=("STUDY_SCENE1_",),
     surface_z=DESK_TOP,
     reach=(-0.3 + SHIFT, 0.25 + SHIFT, -0.35, 0.35),
     robot_base=(-0.75, 0.0, 0.0),  # MountedPanda.base_xpos_offset["study_table"](1.0); the mount lifts it

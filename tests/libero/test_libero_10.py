@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core import libero, programs, worlds
+from core import libero, libero_goals, programs, worlds
 from core.furniture import Spot
+from core.libero_goals import Goal
 from core.spec import FAST, LOOKS, THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
 from core.success import Outcome
 from eval.sims.libero import fixture_poses
@@ -62,15 +63,7 @@ def test_the_compiled_physics_is_liberos(world: str, tmp_path: Path) -> None:
         assert np.allclose(theirs[f"body_quat:{body}"], ours[f"body_quat:{body}"], atol=1e-6), body
 
 
-# the scene each world stands for, by the prefix of its tasks' names (the living room: four scenes)
-PREFIXES = {
-    "libero_10_kitchen_scene3": ("KITCHEN_SCENE3_",),
-    "libero_10_kitchen_scene4": ("KITCHEN_SCENE4_",),
-    "libero_10_kitchen_scene6": ("KITCHEN_SCENE6_",),
-    "libero_10_kitchen_scene8": ("KITCHEN_SCENE8_",),
-    "libero_10_living_room": ("LIVING_ROOM_SCENE",),
-    "libero_10_study": ("STUDY_SCENE1_",),
-}
+WORLDS = tuple(SCENES)  # every LIBERO-10 world, each standing its scenes (World.scenes)
 
 
 # Things the fast look (core/spec.py LOOKS) cannot draw within helpers.OBJECT_BOUND: the stove's mirror
@@ -89,7 +82,7 @@ def _looks() -> list:
         pytest.param(world, look, marks=pytest.mark.xfail(strict=True, reason=FAST_SHORT[world]))
         if look == FAST and world in FAST_SHORT
         else (world, look)
-        for world in PREFIXES
+        for world in WORLDS
         for look in LOOKS
     ]
 
@@ -101,76 +94,90 @@ def test_the_same_pictures_at_liberos_own_initial_states(world: str, look: str, 
     loaded by their LIBERO names and the fixtures posed as LIBERO drew them: both cameras within
     helpers.FRAME_BOUND, every object and fixture within helpers.OBJECT_BOUND inside its own pixels
     (in the fast look, OWN_BOUNDS excepted), every object within 1 mm of where LIBERO puts it."""
-    tasks = [i for i, name in enumerate(libero.tasks(SUITE)) if name.startswith(PREFIXES[world])]
+    tasks = [i for i, name in enumerate(libero.tasks(SUITE)) if name.startswith(worlds.world(world).scenes)]
     cases = [(t, s) for t in tasks for s in range(PICTURE_STATES)]
     pictures, farthest = initial_state_pictures(SUITE, cases, tmp_path, look, world=world)
     pictures.check(OWN_BOUNDS if look == FAST else None)
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 
 
-# LIBERO-10's tasks of two goals our skills do, each as our programs in the order the oracle does
-# them (LIBERO leaves the order free): (world, places on furniture it names, [(program, target,
-# params)]). The pudding goes right of the plate before the mug goes on it (the mug's handle, over
-# the plate's edge, is where the pudding comes down); the moka pot goes on the stove before the
-# knob is turned (from the turned knob the hand's way to the pot sweeps the table); two moka pots go
-# on one burner side by side (`at`). KITCHEN_SCENE8's goal is three, the stove on too, but every one
-# of its initial states has the knob on already (0.54-1.85 rad, LIBERO's `Turnon` from 0.5): its
-# goals here are the two pots (turned on again, a knob near its 2.1 stop moves too little for our
-# scorer, which judges a turn from where the knob started).
-POT_APART = 0.045  # m from the burner's centre, along x: the pots are 8.1 cm across, LIBERO's region 15
-# m from the basket's centre, along y: its box is 12.2 cm across, the cans 6.2 (the first at its centre, the
-# second stood on it, 7 of 10 in)
-CANS_APART = 0.03
-GOALS = {
-    "LIVING_ROOM_SCENE1_put_both_the_alphabet_soup_and_the_cream_cheese_box_in_the_basket": (
-        "libero_10_living_room", (),
-        (("pick_place", "alphabet_soup_1", {"destination": "basket_1"}),
-         ("pick_place", "cream_cheese_1", {"destination": "basket_1"})),
-    ),
-    "LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket": (  # two cans side by side
-        "libero_10_living_room", (),
-        (("pick_place", "alphabet_soup_1", {"destination": "basket_1", "at": [0.0, CANS_APART]}),
-         ("pick_place", "tomato_sauce_1", {"destination": "basket_1", "at": [0.0, -CANS_APART]})),
-    ),
-    "LIVING_ROOM_SCENE5_put_the_white_mug_on_the_left_plate_and_put_the_yellow_and_white_mug_on_the_right_plate": (
-        "libero_10_living_room", (),
-        (("pick_place_on", "porcelain_mug_1", {"destination": "plate_1"}),
-         ("pick_place_on", "white_yellow_mug_1", {"destination": "plate_2"})),
-    ),
-    "LIVING_ROOM_SCENE6_put_the_white_mug_on_the_plate_and_put_the_chocolate_pudding_to_the_right_of_the_plate": (
-        "libero_10_living_room", ("plate_right",),
-        (("place", "plate_right", {"object": "chocolate_pudding_1"}),
-         ("pick_place_on", "porcelain_mug_1", {"destination": "plate_1"})),
-    ),
-    "KITCHEN_SCENE3_turn_on_the_stove_and_put_the_moka_pot_on_it": (
-        "libero_10_kitchen_scene3", ("stove_knob", "stove_burner"),
-        (("place", "stove_burner", {"object": "moka_pot_1"}), ("turn_on", "stove_knob", {})),
-    ),
-    "KITCHEN_SCENE4_put_the_black_bowl_in_the_bottom_drawer_of_the_cabinet_and_close_it": (  # the drawer starts open
-        "libero_10_kitchen_scene4", ("white_bottom_drawer",),
-        (("place_in", "white_bottom_drawer", {"object": "akita_black_bowl_1"}), ("close", "white_bottom_drawer", {})),
-    ),
-    "KITCHEN_SCENE8_put_both_moka_pots_on_the_stove": (  # the stove, on already, is LIBERO's third goal
-        "libero_10_kitchen_scene8", ("stove_burner",),
-        (("place", "stove_burner", {"object": "moka_pot_1", "at": [POT_APART, 0.0]}),
-         ("place", "stove_burner", {"object": "moka_pot_2", "at": [-POT_APART, 0.0]})),
-    ),
-}  # fmt: skip
+# LIBERO-10's tasks of two goals our skills do (core/libero_goals.py reads each as our programs from its
+# BDDL file; the world standing each, worlds.standing). KITCHEN_SCENE8's goal is three, the stove on too, but every one of its
+# initial states has the knob on already (0.54-1.85 rad, LIBERO's `Turnon` from 0.5): its goals here are
+# the two pots (turned on again, a knob near its 2.1 stop moves too little for our scorer, which judges a
+# turn from where the knob started). LIVING_ROOM_SCENE2's cream cheese and butter are left out: twice in
+# LIBERO's first 10 states the hand comes down on the milk beside the cream cheese, once it misses the butter.
+TASKS = (
+    "LIVING_ROOM_SCENE1_put_both_the_alphabet_soup_and_the_cream_cheese_box_in_the_basket",
+    "LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket",
+    "LIVING_ROOM_SCENE5_put_the_white_mug_on_the_left_plate_and_put_the_yellow_and_white_mug_on_the_right_plate",
+    "LIVING_ROOM_SCENE6_put_the_white_mug_on_the_plate_and_put_the_chocolate_pudding_to_the_right_of_the_plate",
+    "KITCHEN_SCENE3_turn_on_the_stove_and_put_the_moka_pot_on_it",
+    "KITCHEN_SCENE4_put_the_black_bowl_in_the_bottom_drawer_of_the_cabinet_and_close_it",
+    "KITCHEN_SCENE8_put_both_moka_pots_on_the_stove",
+)
+MET_ALREADY = {"KITCHEN_SCENE8_put_both_moka_pots_on_the_stove": "turn_on"}  # a goal every initial state has met
+
+
+def _goals(task: str) -> tuple[Goal, ...]:
+    """A TASKS task's goals as our programs, in the order the oracle does them."""
+    found = libero_goals.goals(libero.problem(SUITE, task), worlds.standing(task))
+    assert found is not None, f"{task}: a goal our programs do not do"
+    return tuple(g for g in found if g.program != MET_ALREADY.get(task))
+
+
+def _sites(task: str) -> tuple[str, ...]:
+    """The places on furniture a TASKS task's goals name (the world's kinds of them)."""
+    problem = libero.problem(SUITE, task)
+    return tuple(dict.fromkeys(g.target for g in _goals(task) if g.target not in problem.objects))
+
+
+def test_liberos_goals_read_as_our_programs_in_the_oracles_order() -> None:
+    """Each task's BDDL goal as programs: into the basket side by side, onto the plates, the pudding
+    right of the plate before the mug goes on it, the pot on the burner before the knob is turned,
+    the bowl into the drawer before it is shut, two moka pots on one burner side by side."""
+    read = {t[:18]: [(g.program, g.target, g.params) for g in _goals(t)] for t in TASKS}
+    basket = {"destination": "basket_1"}
+    assert read["LIVING_ROOM_SCENE2"] == [
+        ("pick_place", "alphabet_soup_1", {**basket, "at": [0.0, 0.03]}),
+        ("pick_place", "tomato_sauce_1", {**basket, "at": [-0.0, -0.03]}),
+    ]
+    assert read["LIVING_ROOM_SCENE5"] == [("pick_place_on", "porcelain_mug_1", {"destination": "plate_1"}),
+                                          ("pick_place_on", "white_yellow_mug_1", {"destination": "plate_2"})]  # fmt: skip
+    assert read["LIVING_ROOM_SCENE6"] == [("place", "plate_right", {"object": "chocolate_pudding_1"}),
+                                          ("pick_place_on", "porcelain_mug_1", {"destination": "plate_1"})]  # fmt: skip
+    assert read["KITCHEN_SCENE3_tur"] == [("place", "stove_burner", {"object": "moka_pot_1"}), ("turn_on", "stove_knob", {})]
+    assert read["KITCHEN_SCENE4_put"] == [("place_in", "white_bottom_drawer", {"object": "akita_black_bowl_1"}),
+                                          ("close", "white_bottom_drawer", {})]  # fmt: skip
+    assert read["KITCHEN_SCENE8_put"] == [("place", "stove_burner", {"object": "moka_pot_1", "at": [0.045, 0.0]}),
+                                          ("place", "stove_burner", {"object": "moka_pot_2", "at": [-0.045, -0.0]})]  # fmt: skip
+    microwave = next(t for t in libero.tasks(SUITE) if t.startswith("KITCHEN_SCENE6"))
+    assert libero_goals.goals(libero.problem(SUITE, microwave), worlds.standing(microwave)) is None
+
+
+def test_every_task_stands_in_one_world() -> None:
+    """Each of LIBERO-10's ten tasks has its scene in one world of ours (World.scenes); the living room stands four."""
+    standing = Counter(worlds.standing(task).name for task in libero.tasks(SUITE))
+    assert set(standing) == set(SCENES) and standing["libero_10_living_room"] == 5 and sum(standing.values()) == 10
+    with pytest.raises(worlds.UnknownWorld, match="no world"):
+        worlds.standing("FLOOR_SCENE10_pick_up_the_ketchup")
+
+
 TWO_GOAL_STATES = 2
 
 
 def _goals_spec(task: str, state: int, scene: Scene, setup: Setup) -> tuple[EpisodeSpec, np.ndarray]:
-    """A LIBERO-10 task at one of its initial states as a spec of its goals (GOALS): its objects
+    """A LIBERO-10 task at one of its initial states as a spec of its goals (TASKS): its objects
     under their LIBERO names, where the state puts them, and the places on furniture it names, where
     they stand shut (the state opens a drawer); the first goal the spec's target, the others in
     `task.params["then"]`. Returns the spec and the physics state."""
-    problem, (_, sites, goals) = libero.problem(SUITE, task), GOALS[task]
-    (program, target, params), *rest = goals
-    then = [{"program": p, "target": t, "params": a} for p, t, a in rest]
+    problem, sites = libero.problem(SUITE, task), _sites(task)
+    first, *rest = _goals(task)
+    then = [{"program": g.program, "target": g.target, "params": g.params} for g in rest]
     objects = tuple(SceneObject(i, k, k, 0, (0.0, 0.0, 1.0)) for i, k in (*problem.objects.items(), *((s, s) for s in sites)))
     spec = EpisodeSpec(
-        SUITE, state, 0, objects, target, libero.language(task), "", (), _inventory(task),
-        task=TaskSpec(program, params={**params, THEN: then}), setup=setup, split="exam",
+        SUITE, state, 0, objects, first.target, libero.language(task), "", (), _inventory(task),
+        task=TaskSpec(first.program, params={**first.params, THEN: then}), setup=setup, split="exam",
     )  # fmt: skip
     vector = libero.initial_states(SUITE, task)[state]
     scene.reset(spec)
@@ -185,20 +192,21 @@ def _goals_spec(task: str, state: int, scene: Scene, setup: Setup) -> tuple[Epis
 
 
 def _inventory(task: str) -> tuple[tuple[str, int], ...]:
-    """The bodies of a GOALS task's scene: its objects and the places it names."""
-    return tuple(sorted((Counter(libero.problem(SUITE, task).objects.values()) + Counter(GOALS[task][1])).items()))
+    """The bodies of a TASKS task's scene: its objects and the places it names."""
+    return tuple(sorted((Counter(libero.problem(SUITE, task).objects.values()) + Counter(_sites(task))).items()))
 
 
 @pytest.mark.reference
 def test_two_goals_done_in_turn_and_judged_each_as_libero_judges_them(tmp_path: Path) -> None:
-    """The oracle does every one of each GOALS task's goals from LIBERO's own initial states (waiting
+    """The oracle does every one of each TASKS task's goals from LIBERO's own initial states (waiting
     first for what those states launch to land: the living room's milk and orange juice, 0.5 m up
     in LIBERO's simulator as in ours; taking the mugs and the moka pot by their handles), our
     scorer judges each goal, and the same actions stepped in LIBERO's environment of the task's own
     BDDL file from the same state meet LIBERO's own predicates goal for goal."""
     cases, ours, asked = [], [], []
-    for task, (name, _, _) in GOALS.items():
-        world = worlds.world(name)
+    for task in TASKS:
+        world = worlds.standing(task)
+        name = world.name
         setup = world_setup(world)
         scene, ik = scene_for(_inventory(task), setup.profile, name), ArmIK(np.asarray(world.robot_home), name)
         settle, hold = setup.interface.settle_steps, setup.interface.hold_action(world.robot_home)
@@ -234,8 +242,8 @@ def test_a_bowl_put_in_the_open_drawer_and_the_drawer_pushed_shut() -> None:
     """KITCHEN_SCENE4 from LIBERO's own initial state 0, which leaves the white cabinet's bottom drawer
     open 14.6 cm: the oracle lets the bowl down into it (not pulling it further) and pushes it shut
     past where it stands shut; our scorer judges both goals done, the drawer no longer open."""
-    task = next(t for t in GOALS if t.startswith("KITCHEN_SCENE4"))
-    world = worlds.world(GOALS[task][0])
+    task = next(t for t in TASKS if t.startswith("KITCHEN_SCENE4"))
+    world = worlds.standing(task)
     setup = world_setup(world)
     scene, ik = scene_for(_inventory(task), setup.profile, world.name), ArmIK(np.asarray(world.robot_home), world.name)
     spec, physics = _goals_spec(task, 0, scene, setup)
