@@ -11,9 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from core.furniture import Drawer, Knob, Shelf, Spot
+from core.furniture import Door, Drawer, Inside, Knob, Shelf, Spot
 
-Piece = TypeVar("Piece", Spot, Drawer, Knob, Shelf)
+Piece = TypeVar("Piece", Spot, Drawer, Knob, Shelf, Door, Inside)
 
 # Named colors an instruction may use, as RGBA.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -78,6 +78,8 @@ class Kind:
     drawer: Drawer | None = None
     knob: Knob | None = None
     shelf: Shelf | None = None
+    door: Door | None = None
+    inside: Inside | None = None
 
     @property
     def is_site(self) -> bool:
@@ -87,7 +89,9 @@ class Kind:
 
     def part(self, piece: type[Piece]) -> Piece:
         """This kind's `piece` (its Spot, Drawer, Knob or Shelf), or a ValueError saying it has none."""
-        found = {Spot: self.spot, Drawer: self.drawer, Knob: self.knob, Shelf: self.shelf}[piece]
+        found = {Spot: self.spot, Drawer: self.drawer, Knob: self.knob, Shelf: self.shelf, Door: self.door, Inside: self.inside}[
+            piece
+        ]
         if found is None:
             raise ValueError(f"{self.name} has no {piece.__name__.lower()}")
         return found

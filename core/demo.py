@@ -37,8 +37,11 @@ class Skills(Protocol):
     def pull_open(self, drawer_id: str, travel: float = ...) -> None:
         """Take a drawer's handle and pull the drawer `travel` out (nothing where it is out that far)."""
 
-    def push_closed(self, drawer_id: str) -> None:
-        """Push an open drawer shut with the closed fingers against its front."""
+    def put_in(self, object_id: str, place_id: str) -> None:
+        """Put the object inside a place (a drawer, opened part way; the microwave's inside)."""
+
+    def shut(self, place_id: str) -> None:
+        """Shut a drawer, pushed in, or a door, swung round its hinge."""
 
 
 DemoScript = Callable[[Skills, EpisodeSpec], None]  # a demonstration, written over the skills: `demo(skills, spec)`

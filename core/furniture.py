@@ -1,8 +1,9 @@
 """The furniture a place belongs to, typed: where on a fixture the place is (`Spot`), and the piece
 it is a part of, each owning the thresholds LIBERO judges it by (as LIBERO's articulated objects
 own their open and turn-on ranges): a cabinet's `Drawer`, the stove's `Knob`, the wine rack's
-sloping `Shelf`. A kind (core/catalog.py) carries them as typed fields, so the success predicates
-(core/success.py) and the skills (oracle/furniture.py) read them by name (`Kind.part`).
+sloping `Shelf`, the microwave's `Door` and the `Inside` behind it. A kind (core/catalog.py)
+carries them as typed fields, so the success predicates (core/success.py) and the skills
+(oracle/furniture.py) read them by name (`Kind.part`).
 """
 
 from __future__ import annotations
@@ -78,6 +79,38 @@ class Knob:
         `turn_on` or more: turned by an angle a, it moves 2 radius sin(a / 2), the chord."""
         chord = float(np.linalg.norm(np.subtract(end, start)))
         return chord >= 2 * radius * np.sin(self.turn_on / 2)
+
+
+@dataclass(frozen=True)
+class Door:
+    """A door on an upright hinge (the microwave's), its place a point on it `Spot.offset` from the
+    hinge, in the door's own frame, whose origin is on the hinge's axis (a swing carries the point
+    round it). Open `open_turn` radians or more from shut; closed within `shut_turn` of shut:
+    LIBERO's `Close` of the microwave, its hinge above -0.005 rad."""
+
+    open_turn: float = 0.5
+    shut_turn: float = 0.005
+
+    def closed(self, start: tuple[float, ...], end: tuple[float, ...], shut: tuple[float, ...], radius: float) -> bool:
+        """Whether the door, its point `shut` where it stands shut, went from open at `start` to shut
+        at `end`: turned by an angle a, the point `radius` from the hinge is 2 radius sin(a / 2) away."""
+
+        def turn(at: tuple[float, ...]) -> float:
+            return 2.0 * float(np.arcsin(min(1.0, float(np.linalg.norm(np.subtract(at, shut))) / (2.0 * radius))))
+
+        return turn(start) >= self.open_turn and turn(end) <= self.shut_turn
+
+
+@dataclass(frozen=True)
+class Inside:
+    """The inside of a box behind a door (the microwave's), its place LIBERO's region site in it: a
+    thing brought in is let down on its floor, `floor` below the site, `front` from the site toward
+    its opening (`out`, the fixture's frame), where the hand holding it from above still clears the
+    box's top; then the closed fingers push it in to the site (oracle/furniture.py `_push_inside`)."""
+
+    floor: float
+    front: float
+    out: tuple[float, float, float] = (0.0, -1.0, 0.0)
 
 
 @dataclass(frozen=True)

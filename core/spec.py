@@ -59,6 +59,14 @@ class Counterfactual:
     program: str | None = None
     goal: int = 0
 
+    def to_dict(self) -> dict[str, Any]:
+        """As specs and scene records write it: `goal` only where not the first (which is all there
+        was before it, so their bytes are unchanged)."""
+        d = asdict(self)
+        if not self.goal:
+            del d["goal"]
+        return d
+
 
 THEN = "then"  # a task's goals after its first, in its params: [{"program", "target", "params"}, ...] (EpisodeSpec.goals)
 
@@ -195,9 +203,7 @@ class EpisodeSpec:
             del d["sim"]["look"]
         if self.switch is None:  # and those whose instruction never changes
             del d["switch"]
-        for cf in d["counterfactuals"]:  # and counterfactuals naming a task's first goal, which is all there was before `goal`
-            if cf["goal"] == 0:
-                del cf["goal"]
+        d["counterfactuals"] = [c.to_dict() for c in self.counterfactuals]
         return d
 
     def to_json(self) -> str:

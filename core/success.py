@@ -144,9 +144,14 @@ def opened(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
     return worlds.kind(spec.object(drawer).kind, spec.setup.world).part(Drawer).opened(outcome.start[drawer], outcome.end[drawer])
 
 
-def closed(spec: EpisodeSpec, outcome: Outcome, drawer: str) -> bool:
-    kind = worlds.kind(spec.object(drawer).kind, spec.setup.world)
-    return kind.part(Drawer).closed(outcome.start[drawer], outcome.end[drawer], spec.object(drawer).pos)
+def closed(spec: EpisodeSpec, outcome: Outcome, place: str) -> bool:
+    """LIBERO's `Close` of a drawer's region or of a door (the microwave's): shut from open, the
+    place recorded where it stands shut."""
+    kind = worlds.kind(spec.object(place).kind, spec.setup.world)
+    start, end, shut = outcome.start[place], outcome.end[place], spec.object(place).pos
+    if kind.door is not None:
+        return kind.door.closed(start, end, shut, float(np.linalg.norm(kind.part(Spot).offset)))
+    return kind.part(Drawer).closed(start, end, shut)
 
 
 def turned_on(spec: EpisodeSpec, outcome: Outcome, knob: str) -> bool:

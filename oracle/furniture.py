@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.furniture import Drawer, Shelf
+from core.furniture import Drawer, Inside, Shelf, Spot
 from core.rotations import facing, turned, yaw_matrix
 from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
 from oracle.ik import DOWN, grasp_yaw
@@ -31,6 +31,20 @@ LAY_STEPS, LAY_SETTLE, LAY_BACK = 6, 10, 0.08
 # off before it rises (past the handle bar of the drawer above); how far below level it points
 FRONT_GAP, SHUT_PAST, SHUT_SPEED, SHUT_BACK, SHUT_PITCH = 0.03, 0.04, 0.05, 0.06, float(np.radians(30))
 BESIDE_MARGIN = 0.01  # how far inside a place's edge a thing let down beside another is aimed (it drifts as it lands)
+# putting a thing in a drawer: how far the drawer is pulled (m: 12 cm of it then lie uncovered;
+# wide open, its front would stand over what stands before the cabinet, the bowl to be put in it),
+# and how high the thing is lifted (over the drawer's sides, so no later rise shakes it loose)
+DRAWER_SLOT, DRAWER_LIFT = 0.13, 0.22
+# putting a thing inside the microwave (`_push_inside`): how high it is lifted; how far over the floor it is
+# let go (carried in straight from INSIDE_APPROACH before it: on a joint-space way in, it caught the floor's
+# front edge); how far the hand backs off out of the opening, and rises, before it pushes; the push: the
+# fingers' height over the floor, their gap before the thing's side, how far past the place it is sent, how fast
+INSIDE_LIFT, INSIDE_DROP, INSIDE_BACK, INSIDE_RISE, INSIDE_APPROACH = 0.12, 0.012, 0.06, 0.08, 0.12
+PUSH_LOW, PUSH_GAP, PUSH_PAST, PUSH_SPEED = 0.04, 0.02, 0.01, 0.08
+# swinging a door shut (`_swing_shut`): how far out of the hinge's line the closed fingers press it, at its
+# place (6 mm into its outer face); how far clear of it they come down; how far past shut they are sent (its
+# hinge stops it there); in how many steps along the arc (12 took LIBERO-10's KITCHEN_SCENE6 past its 520)
+DOOR_PRESS, DOOR_CLEAR, DOOR_PAST, DOOR_STEPS = 0.035, 0.04, 0.03, 6
 
 
 class FurnitureSkills(Clearance):
@@ -150,6 +164,82 @@ class FurnitureSkills(Clearance):
         self.open()
         self.move_linear(self.scene.ee_pos() + 0.04 * out + [0.0, 0.0, 0.06], speed=0.2)
         self.facing = None  # the next move turns the hand down again
+
+    def put_in(self, object_id: str, place_id: str) -> None:
+        """Put the object inside a place: a drawer opened part way first (where it is not open that far
+        already), the microwave's inside let down at its front and pushed in."""
+        if self._kind(place_id).inside is not None:
+            self._push_inside(object_id, place_id)
+            return
+        self.pull_open(place_id, DRAWER_SLOT)
+        self.grasp(object_id, onto=place_id)
+        self.lift(DRAWER_LIFT)
+        self.place(place_id)
+
+    def _push_inside(self, object_id: str, place_id: str) -> None:
+        """Carry the object (by its handle, from above) over the inside's floor at its front, let it
+        go there and back out; then push it in to the place with the closed fingers, the hand
+        pointing in SHUT_PITCH below level (held from above deeper in, the hand meets the box's top)."""
+        inside, kind = self._kind(place_id).part(Inside), self._kind(object_id)
+        site, rot = self.scene.object_pos(place_id), self.scene.body_pose(place_id)[1]
+        out = rot @ np.asarray(inside.out)
+        floor = site[2] + inside.floor
+        self.grasp(object_id)
+        self.lift(INSIDE_LIFT)
+        hand = self.scene.ee_pos() - self.scene.object_pos(object_id)
+        let_go = site + inside.front * out
+        let_go = np.array([let_go[0], let_go[1], floor + kind.bottom + INSIDE_DROP]) + hand
+        self.move_to(let_go + INSIDE_APPROACH * out)  # before the opening, then straight in over the floor's lip
+        self.move_linear(let_go, speed=0.1)
+        self.open()
+        self.move_linear(self.scene.ee_pos() + INSIDE_BACK * out, speed=0.1)
+        self.move_linear(self.scene.ee_pos() + [0.0, 0.0, INSIDE_RISE], speed=0.1)
+        pos, reach = self.scene.object_pos(object_id), max(kind.size[:2]) / 2  # how far it reaches out of its origin
+        level = facing(tuple(-out[:2]), np.pi / 2)
+        frame = turned(level[:, 0], SHUT_PITCH) @ level
+
+        def low(at: np.ndarray) -> np.ndarray:  # the fingers at the push's height over the floor
+            return np.array([at[0], at[1], floor + PUSH_LOW])
+
+        start, end = low(pos + (reach + PUSH_GAP) * out), low(site + (reach - PUSH_PAST) * out)  # its side, now and in place
+        self.gripper = CLOSED
+        self.facing = frame
+        self.move_to(start + [0.0, 0.0, INSIDE_RISE])
+        self.move_linear(start, speed=0.1)
+        self.move_linear(end, speed=PUSH_SPEED)
+        self.move_linear(self.scene.ee_pos() + 2 * INSIDE_BACK * out, speed=0.1)
+        self.move_linear(self.scene.ee_pos() + [0.0, 0.0, 2 * INSIDE_RISE], speed=0.1)
+        self.facing = None
+
+    def shut(self, place_id: str) -> None:
+        """Shut a drawer (pushed in) or a door (swung round its hinge)."""
+        if self._kind(place_id).door is not None:
+            self._swing_shut(place_id)
+        else:
+            self.push_closed(place_id)
+
+    def _swing_shut(self, door_id: str) -> None:
+        """Swing an open door shut: the closed fingers, the hand pointing down and turned across the
+        door, come down clear of its outer face at its place (`Spot.offset` from the hinge) and press
+        it round the hinge in DOOR_STEPS to DOOR_PAST beyond where it stands shut; then back off and rise."""
+        hinge, rot = self.scene.body_pose(door_id)
+        along = np.asarray(self._kind(door_id).part(Spot).offset)
+        shut = np.subtract(self.spec.object(door_id).pos, hinge)
+        now = float(np.arctan2(rot[1, 0], rot[0, 0]))
+        closed = float(np.arctan2(shut[1], shut[0]) - np.arctan2(along[1], along[0]))
+        closed = now + float(np.arctan2(np.sin(closed - now), np.cos(closed - now)))  # the shut angle nearest the door's
+
+        def pressing(angle: float, out: float) -> np.ndarray:
+            return hinge + yaw_matrix(angle) @ (along + [0.0, -out, 0.0])
+
+        self.gripper = CLOSED
+        start = pressing(now, DOOR_PRESS + DOOR_CLEAR)
+        self.move_to([*start[:2], max(self.scene.ee_pos()[2], self.clearance())], yaw=now + np.pi / 2)
+        self.move_linear(start, speed=0.1)
+        for angle in np.linspace(now, closed + np.sign(closed - now) * DOOR_PAST, DOOR_STEPS):
+            self.move_to(pressing(float(angle), DOOR_PRESS), yaw=float(angle) + np.pi / 2)
+        self.move_linear(self.scene.ee_pos() + DOOR_CLEAR * (yaw_matrix(closed) @ [0.0, -1.0, 0.0]), speed=0.1)
+        self.move_linear(self.scene.ee_pos() + [0.0, 0.0, 0.1], speed=0.1)
 
     def push_closed(self, drawer_id: str) -> None:
         """Push an open drawer shut: the closed fingers side by side, the hand pointing into the

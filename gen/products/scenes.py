@@ -48,7 +48,7 @@ def row(
         "target": spec.target,
         **switch,
         "scene": json.dumps(spec.scene_record()),
-        "counterfactuals": json.dumps([asdict(c) for c in spec.counterfactuals]),
+        "counterfactuals": json.dumps([c.to_dict() for c in spec.counterfactuals]),
         "spec": spec.to_json(),
         "spec_hash": spec.hash,
         "scene_hash": spec.scene_hash,

@@ -211,3 +211,46 @@ def test_the_partial_face_counts_each_goal_of_the_task_rows() -> None:
     assert report["faces"]["task"]["k"] == 0 and report["faces"]["swap_success"]["k"] == 1
     assert report["partial"]["goals"] == 2 and report["partial"]["done"] == {"1": 1}
     assert [e["k"] for e in report["partial"]["each"]] == [1, 0]
+
+
+HINGE = np.array([-0.1725, 0.262, 1.016])  # KITCHEN_SCENE6's microwave door's hinge
+
+
+def _door_at(angle: float) -> tuple[float, float, float]:
+    """Where the door's place (20 cm along it from the hinge) stands, the door turned `angle` from shut."""
+    return tuple(HINGE + 0.2 * np.array([np.cos(angle), np.sin(angle), 0.0]))
+
+
+@pytest.mark.parametrize(
+    ("start", "end", "closed"),
+    [(-1.58, -0.004, True), (-1.58, 0.0, True), (-1.58, -0.006, False), (-1.58, -1.2, False), (-0.3, 0.0, False)],
+)
+def test_a_door_is_closed_when_swung_from_open_to_within_liberos_turn_of_shut(start: float, end: float, closed: bool) -> None:
+    """LIBERO's `Close(microwave_1)`: its hinge above -0.005 rad; only a door that started open (0.5 rad or more)."""
+    objects = (
+        SceneObject("white_yellow_mug_1", "white_yellow_mug", "yellow and white mug", 0, (0.0, 0.0, 0.9)),
+        SceneObject("microwave_door", "microwave_door", "microwave", 1, _door_at(0.0)),
+    )
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_kitchen_scene6")
+    spec = EpisodeSpec("libero_10", 0, 0, objects, "microwave_door", "", "", (), (), TaskSpec("close"), setup)
+    begin = {o.id: o.pos for o in objects} | {"microwave_door": _door_at(start)}
+    outcome = Outcome(begin, {**begin, "microwave_door": _door_at(end)}, (0.0, 0.0, 1.0))
+    assert programs.succeeded(spec, outcome) is closed
+
+
+def test_liberos_goals_for_the_microwave_are_in_its_heating_region_and_close_of_it() -> None:
+    """What `sim=libero` asks LIBERO's `check_success` for KITCHEN_SCENE6: its BDDL file's words."""
+    objects = (
+        SceneObject("white_yellow_mug_1", "white_yellow_mug", "yellow and white mug", 0, (0.0, 0.0, 0.9)),
+        SceneObject("microwave_inside", "microwave_inside", "microwave", 1, (0.0, 0.36, 1.016)),
+        SceneObject("microwave_door", "microwave_door", "microwave", 2, _door_at(0.0)),
+    )
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_kitchen_scene6")
+    then = [{"program": "close", "target": "microwave_door", "params": {}}]
+    task = TaskSpec("place_in", params={"object": "white_yellow_mug_1", THEN: then})
+    spec = EpisodeSpec("libero_10", 0, 0, objects, "microwave_inside", "", "", (), (), task, setup)
+    start = RowStart("k", {}, {}, None, tuple(o.id for o in objects), ("white_yellow_mug_1",),
+                     ("microwave_1_heating_region", "microwave_1_microdoorroot@0.2,0.0,0.0"))  # fmt: skip
+    put_in, close = spec.goals()
+    assert predicate(put_in, start, "microwave_inside", "place_in") == ["In", "white_yellow_mug_1", "microwave_1_heating_region"]
+    assert predicate(close, start, "microwave_door", "close") == ["Close", "microwave_1"]
