@@ -54,12 +54,7 @@ def judge(
     `turns`: the movable containers' orientations, where logged (a turned basket's box turns)."""
     spec = EpisodeSpec.from_json(row["spec"])
     end = len(ee) - 1 if steps is None else steps
-    outcome = Outcome(
-        {k: tuple(v[0]) for k, v in objects.items()},
-        {k: tuple(v[end]) for k, v in objects.items()},
-        tuple(ee[end]),
-        {k: tuple(v[end]) for k, v in (turns or {}).items()},
-    )
+    outcome = logged_outcome(ee, objects, end, turns)
     listed = json.loads(row["alternatives"])
     alternatives = [(a["target"], a["program"]) for a in listed]
     result = {}
@@ -69,6 +64,18 @@ def judge(
         distances = contact_distance(aimed, {k: v[: end + 1] for k, v in objects.items()}, *alt, ee[: end + 1])
         result[alt] = {"achieved": achieved(spec, outcome, *alt, goal), "distance": float(np.min(distances))}
     return result
+
+
+def logged_outcome(
+    ee: np.ndarray, objects: dict[str, np.ndarray], end: int, turns: dict[str, np.ndarray] | None = None
+) -> Outcome:
+    """A logged rollout's outcome at step `end`: where everything started, and stood then."""
+    return Outcome(
+        {k: tuple(v[0]) for k, v in objects.items()},
+        {k: tuple(v[end]) for k, v in objects.items()},
+        tuple(ee[end]),
+        {k: tuple(v[end]) for k, v in (turns or {}).items()},
+    )
 
 
 def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tuple[str, str]]:
@@ -279,9 +286,10 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             count("switch_blind", original, "5cm")
         else:
             ok = count(face, asked, "achieved")
-            goals = _goals_done(row, ee, objects, turns)
-            if face == "task" and len(goals) > 1:
-                partial.append(([g and not error for g in goals], trial))
+            spec = EpisodeSpec.from_json(row["spec"]) if face == "task" else None
+            if spec is not None and len(spec.goals()) > 1:  # each goal of a task of more, done at the end
+                done = programs.each(spec, logged_outcome(ee, objects, len(ee) - 1, turns))
+                partial.append(([g and not error for g in done], trial))
         if predicted is not None and face in PREDICTED_FACES:
             if row[FRAME_OBJECTS] is None:
                 unmapped += 1
@@ -351,15 +359,6 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             f"(answers.parquet {FRAME_OBJECTS}: made before the prediction face); make the exam again to score them"
         }
     return report
-
-
-def _goals_done(row: pd.Series, ee: np.ndarray, objects: dict[str, np.ndarray], turns: dict[str, np.ndarray]) -> tuple:
-    """Each goal of the row's task, done at the rollout's end or not (one entry for a task of one goal)."""
-    spec = EpisodeSpec.from_json(row["spec"])
-    if len(spec.goals()) == 1:
-        return (None,)
-    start, end = {k: tuple(v[0]) for k, v in objects.items()}, {k: tuple(v[-1]) for k, v in objects.items()}
-    return programs.each(spec, Outcome(start, end, tuple(ee[-1]), {k: tuple(v[-1]) for k, v in turns.items()}))
 
 
 def _partial(entries: list[tuple[list[bool], int]]) -> dict:
