@@ -96,6 +96,14 @@ class Kind:
             raise ValueError(f"{self.name} has no {piece.__name__.lower()}")
         return found
 
+    def beside(self, nth: int) -> list[float] | None:
+        """Where the `nth` (0 or 1) of two things brought to it stands, from its centre (`side_by_side`:
+        the first one way, the second the other); None: at its centre."""
+        if self.side_by_side is None:
+            return None
+        sign = 1.0 if nth == 0 else -1.0
+        return [sign * v for v in self.side_by_side]
+
     @property
     def anchor(self) -> str:
         """Where a place on a fixture is, as another simulator is asked to follow it (`Spot.anchor`)."""

@@ -96,9 +96,7 @@ def _side_by_side(ordered: list[Goal], problem: Problem, world: World) -> list[G
         if kind is None or kind.side_by_side is None:
             placed.append(goal)
             continue
-        sign = 1.0 if shared.index(len(placed)) == 0 else -1.0
-        at = [sign * v for v in kind.side_by_side]
-        placed.append(Goal(goal.program, goal.target, {**goal.params, "at": at}))
+        placed.append(Goal(goal.program, goal.target, {**goal.params, "at": kind.beside(shared.index(len(placed)))}))
     return placed
 
 

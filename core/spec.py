@@ -176,8 +176,7 @@ class EpisodeSpec:
         if self.switch is None:
             return self
         cf = self.counterfactuals[self.switch]
-        target, program = self.choice(cf)
-        return replace(self, target=target, instruction=cf.instruction, task=replace(self.task, program=program), switch=None)
+        return replace(self.asking(*self.choice(cf), cf.goal), instruction=cf.instruction, switch=None)
 
     def object(self, object_id: str) -> SceneObject:
         for obj in self.objects:

@@ -1,4 +1,5 @@
-"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal), or
+"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal, or a world of
+LIBERO-10's, whose tasks span several: libero_10_living_room takes those set in its living room), or
 `suite=<a LIBERO-PRO suite>` (libero_object_swap, libero_spatial_lan, ...): an exam on LIBERO's
 own initial states.
 

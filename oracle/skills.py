@@ -31,6 +31,8 @@ class Skills(FurnitureSkills):
     """grasp, lift, place (or lay along a sloping shelf), push, and the furniture's motions (turn a
     knob, pull a drawer open: oracle/furniture.py), over the scene of one episode."""
 
+    placed = False  # whether the hand has let something go where it was brought (a goal before this one's)
+
     def open(self, steps: int = 6) -> None:
         self.held, self.gentle = None, False
         super().open(steps)
@@ -69,7 +71,11 @@ class Skills(FurnitureSkills):
         if kind.handle is not None:  # down onto the handle, turned as the thing is
             point = top = pos + yaw_matrix(self.scene.object_yaw(object_id)) @ np.asarray(kind.handle)
         yaw = grasp_yaw(axis)
-        self.move_to([top[0], top[1], max(top[2] + approach, self.clearance())], yaw)
+        above = [top[0], top[1], max(top[2] + approach, self.clearance())]
+        if self.placed:  # from where an earlier goal let go (the basket) the way here sagged into what stands
+            # near it (a can pushed off 7 cm, LIBERO-10's living room): straight over it at the hand's height first
+            self.move_linear([top[0], top[1], max(self.scene.ee_pos()[2], above[2])])
+        self.move_to(above, yaw)
         if kind.rim:  # straight down onto the wall: a joint-space path could sweep a finger through the bowl
             self.move_linear(point)
         else:
@@ -148,6 +154,7 @@ class Skills(FurnitureSkills):
             self._settle(self.q)
             self.move_to(down)
         self.open()
+        self.placed = True
         self.move_to([over[0], over[1], release_z + RETREAT])
 
     def _within_reach(self, over: np.ndarray, height: float, destination_id: str) -> np.ndarray:

@@ -280,6 +280,18 @@ def canonical_reports(shared: Shared, trials: dict[str, int], world: str = "libe
     return {policy: shared.take(exam, policy, n, () if policy == "nothing" else ("task", "swap")) for policy, n in trials.items()}
 
 
+def _contained(instance: dict[str, str], goal: EpisodeSpec) -> list[str]:
+    """A goal carrying a thing into a container, as LIBERO's BDDL says it."""
+    return ["In", instance[goal.target], f"{instance[goal.task.params['destination']]}_contain_region"]
+
+
+def _holding(world: World, instances: set[str]) -> str:
+    """A task of the world's scenes whose scene holds every instance (LIBERO-10's living room:
+    LIVING_ROOM_SCENE2, its seven groceries and the basket)."""
+    suite = world.suite
+    return next(t for t in libero.tasks(suite) if world.stands(t) and instances <= set(libero.problem(suite, t).objects))
+
+
 def liberos_replay(dataset: Path, world: World) -> dict:
     """A dataset's episodes as eval/sims/libero_env/reference.py's `replay` takes them, rebuilt from
     their records alone: LIBERO's instance names (a place on furniture: its site's), poses, robot
@@ -313,6 +325,8 @@ def liberos_replay(dataset: Path, world: World) -> dict:
             "fingers": scene["robot"]["fingers"],
             "actions": np.stack(rows[ACTION_KEY].to_numpy()).astype(float).tolist(),
         }
+        if world.scenes:  # a world of LIBERO-10's: every goal, as LIBERO's In of the container judges it
+            episode["goals"] = [_contained(instance, g) for g in final.goals()]
         own = programs.named(task["program"]).libero
         if own is not None:  # a motion of LIBERO-Goal's (a drawer, the knob, a push)
             place = libero.place_name(world.kind(kinds[goal]), instance[goal])
@@ -320,6 +334,9 @@ def liberos_replay(dataset: Path, world: World) -> dict:
         elif moved is None and "destination" not in params:  # pick, push: LIBERO has none; judged by positions
             episode["goal"] = ["Up", instance[goal]]
         episodes.append(episode)
+    if world.scenes:
+        held = {o["instance"] for e in episodes for o in e["objects"]}
+        return {"suite": world.suite, "task": _holding(world, held), "episodes": episodes}
     if not world.fixtures:
         return {"episodes": episodes}
     fixtures = {tuple(pose) for r in records.scene for pose in fixture_poses(json.loads(r))}

@@ -142,6 +142,10 @@ class World:
     body_name: Callable[[str, int], str] = _numbered  # the model's name for the i-th (from 0) body of a kind
     requires: Callable[[], None] = _ready  # raises WorldUnavailable when the world's assets are missing
 
+    def stands(self, task: str) -> bool:
+        """Whether a task of the world's suite is set in this world (every one, unless `scenes` says which)."""
+        return not self.scenes or task.startswith(self.scenes)
+
     def kind(self, name: str) -> Kind:
         try:
             return self.kinds[name]
@@ -175,7 +179,7 @@ def world(name: str) -> World:
 
 def standing(task: str) -> World:
     """The world that stands a LIBERO task's scene, where a world says which scenes it stands (`scenes`)."""
-    found = [w for w in _worlds().values() if task.startswith(w.scenes)] if task else []
+    found = [w for w in _worlds().values() if w.scenes and w.stands(task)] if task else []
     if len(found) != 1:
         raise UnknownWorld(f"{len(found) or 'no'} world(s) stand the scene of task {task!r}")
     return found[0]

@@ -5,8 +5,8 @@ the flat stove where the scene's region stands it, the moka pot and the frying p
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_kitchen_tabletop_manipulation.py,
 envs/arenas/kitchen_arena.py and the task's BDDL file; tests/libero/test_libero_10.py compares the
-compiled scene with LIBERO's own environment. The world has no `suite` until LIBERO-10's canonical
-exam, which spans its nine scenes' worlds, takes its tasks (issue 53).
+compiled scene with LIBERO's own environment. Its suite is LIBERO-10's,
+whose tasks span several worlds: `scenes` says which this one stands.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ KITCHEN = replace(
     table_friction=(1.0, 0.005, 0.0001),  # KitchenTableArena's default, which LIBERO's kitchen problem keeps
     robot_faces=2000,
     fixtures=(),
-    suite="",
+    suite="libero_10",
     episode_steps=520,  # lerobot's envs/libero.py: libero_10's max_episode_steps (its longest demonstration: 505)
 )
 

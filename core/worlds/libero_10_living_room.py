@@ -7,8 +7,8 @@ four scenes stand no furniture, so one world holds them all; what stands where, 
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_living_room_tabletop_manipulation.py,
 envs/robots/on_the_ground_panda.py and envs/arenas/living_room_arena.py; tests/libero/test_libero_10.py
-compares the compiled scene with LIBERO's own environment. The world has no `suite` until LIBERO-10's
-canonical exam, which spans its scenes' worlds, takes its tasks (issue 53).
+compares the compiled scene with LIBERO's own environment. Its suite is LIBERO-10's,
+whose tasks span several worlds: `scenes` says which this one stands.
 """
 
 from __future__ import annotations

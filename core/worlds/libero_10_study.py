@@ -7,8 +7,8 @@ about) and LIBERO's agentview camera.
 
 Every value here is LIBERO's, from libero/libero/envs/problems/libero_study_tabletop_manipulation.py,
 envs/robots/mounted_panda.py and the task's BDDL file; tests/libero/test_libero_10.py compares the
-compiled scene with LIBERO's own environment. The world has no `suite` until LIBERO-10's canonical
-exam, which spans its scenes' worlds, takes its tasks (issue 53).
+compiled scene with LIBERO's own environment. Its suite is LIBERO-10's,
+whose tasks span several worlds: `scenes` says which this one stands.
 """
 
 from __future__ import annotations

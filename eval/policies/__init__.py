@@ -36,7 +36,6 @@ eval/policies/registry.py makes them (and every other policy) by name.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
@@ -65,6 +64,7 @@ class Context:
     seed: int
     initial_state: np.ndarray | None = None  # the physics state the rollout starts from (None: the spec's poses)
     switch: tuple[int, str] | None = None  # a switch row's (step, instruction from then on): the policy is shown it then
+    goal: int = 0  # which goal of a task of more (LIBERO-10's) the row's ask renames (core/exam.py goal_of)
 
 
 class Policy(Protocol):
@@ -153,7 +153,7 @@ class Oracle(Scripted):
         """The demonstration of what the row asks for; on a switch row, the original ask's until the
         switch, then a new plan of the newly named one from where the arm is then."""
         spec, script = context.spec, referents.registry.demo_of(context.spec.referent)
-        asked = dataclasses.replace(spec, target=context.target, task=dataclasses.replace(spec.task, program=context.program))
+        asked = spec.asking(context.target, context.program, context.goal)
         if context.switch is None:
             self._actions, self._t = self._actions_for(asked, script, context), 0
             return

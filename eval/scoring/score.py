@@ -91,6 +91,13 @@ def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tup
     return [(o.id, program) for o in spec.objects if o.id not in kept and not worlds.kind(o.kind, spec.setup.world).is_site]
 
 
+def _landing(row: pd.Series) -> str:
+    """The level a swap or switch row is read at: where the hand lands (5 cm), or for a task of more
+    goals (LIBERO-10's "put both"), whether the whole ask was done: there the hand lands on the kept
+    name's object whichever name it read."""
+    return "achieved" if len(EpisodeSpec.from_json(row["spec"]).goals()) > 1 else "5cm"
+
+
 def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
     done = [a for a, j in judged.items() if j["achieved"]]
     if done:
@@ -273,17 +280,18 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             faces[name].append({"trial": trial, "ok": levels[headline], "init": init, "chance": chance, "levels": levels})
             return levels[headline]
 
+        landing = _landing(row)
         if face == "swap":
-            ok = count("obeyed_name", asked, "5cm")
-            count("true_target", original, "5cm")
+            ok = count("obeyed_name", asked, landing)
+            count("true_target", original, landing)
             count("swap_success", asked, "achieved")
             distances.append((judged[asked]["distance"], judged[original]["distance"]))
             if located is not None:
                 nearest = _nearest(EpisodeSpec.from_json(row["spec"]), objects, located)
                 grounding.append((float(nearest == row["target"]), trial, chance))
         elif face == "switch":  # scored as a swap: the newly named one, or on to the original (blind)
-            ok = count("switch_obeyed", asked, "5cm")
-            count("switch_blind", original, "5cm")
+            ok = count("switch_obeyed", asked, landing)
+            count("switch_blind", original, landing)
         else:
             ok = count(face, asked, "achieved")
             spec = EpisodeSpec.from_json(row["spec"]) if face == "task" else None
@@ -486,5 +494,7 @@ def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
     for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
         log = parsed[int(row["row"])]
         judged = judge(exam, row, log.ee, log.objects, turns=log.turns)
-        obeyed[int(row["row"])] = not log.error and landed(judged) == (row["target"], row["program"])
+        asked = (row["target"], row["program"])
+        read = judged[asked]["achieved"] if LEVELS[_landing(row)] is None else landed(judged) == asked
+        obeyed[int(row["row"])] = not log.error and read
     return obeyed

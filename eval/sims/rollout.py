@@ -20,7 +20,7 @@ from typing import Protocol
 import numpy as np
 import pandas as pd
 
-from core.exam import SWITCH
+from core.exam import SWITCH, goal_of
 from core.profiles import IMAGE_PREFIX, NATIVE, PROFILES, STATE_KEY, TASK_KEY, Profile
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
@@ -180,7 +180,9 @@ class Runner:
         start = np.asarray(row["initial_state"])
         switch = json.loads(row.get(SWITCH) or "{}")
         at = (int(switch["step"]), str(switch["instruction"])) if switch else None
-        context = Context(spec, str(row["instruction"]), str(row["target"]), str(row["program"]), int(row["row"]), start, at)
+        target, program = str(row["target"]), str(row["program"])
+        goal = goal_of(json.loads(row["alternatives"]), target, program)
+        context = Context(spec, str(row["instruction"]), target, program, int(row["row"]), start, at, goal)
         try:
             self.policy.reset(context)
         except Exception as exc:  # a broken policy fails its rollout, not the run

@@ -37,13 +37,19 @@ def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> tuple[pd.DataFra
     """One row per (episode, alternative, variable); and each variable's families."""
     rows = []
     families: dict[str, Family] = defaultdict(lambda: Family.NONE)
-    for i, spec in enumerate(specs):
-        answer = referent.answer(spec)
-        for alt in referent.alternatives(spec):
+    for i, goal in enumerate(_goals(specs)):
+        answer = referent.answer(goal)
+        for alt in referent.alternatives(goal):
             for var, variable in alt.variables.items():
                 rows.append((i, i % FOLDS, alt.id, var, repr(variable.value), alt.id == answer))
                 families[var] |= variable.family
     return pd.DataFrame(rows, columns=["episode", "fold", "alt", "variable", "value", "answer"]), families
+
+
+def _goals(specs: Sequence[EpisodeSpec]) -> list[EpisodeSpec]:
+    """What the audit reads: each goal of each episode (LIBERO-10's "put both": the second named too,
+    which nothing but the words may predict either), as a spec of that goal (EpisodeSpec.goals)."""
+    return [goal for spec in specs for goal in spec.goals()]
 
 
 def _held_out_hits(df: pd.DataFrame) -> float:
@@ -79,7 +85,7 @@ def expected_leaks(referent: Referent) -> Family:
 
 def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
     """The audit as JSON-ready data; see module docstring."""
-    n = len(specs)
+    n = len(_goals(specs))
     df, families = _table(referent, specs)
     per_episode = df.drop_duplicates(["episode", "alt"]).groupby("episode").size()
     chance = float((1.0 / per_episode).mean())
@@ -106,7 +112,8 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
     return {
         "version": AUDIT_VERSION,
         "referent": referent.name,
-        "episodes": n,
+        "episodes": len(specs),
+        **({"goals": n} if n != len(specs) else {}),  # a task of more goals: each audited
         "chance": round(chance, 4),
         "method": f"{FOLDS}-fold held-out accuracy of a value->answer-rate predictor per variable; leak when the "
         f"Bonferroni-corrected one-sided 95% Wilson lower bound exceeds chance + {LEAK_MARGIN}",
@@ -133,9 +140,9 @@ def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
 def role_balance(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict[str, dict[str, dict[str, int]]]:
     """value -> role (target / distractor) -> slot -> count."""
     table: dict[str, dict[str, dict[str, int]]] = defaultdict(lambda: {"target": {}, "distractor": {}})
-    for spec in specs:
-        answer = referent.answer(spec)
-        for alt in referent.alternatives(spec):
+    for goal in _goals(specs):
+        answer = referent.answer(goal)
+        for alt in referent.alternatives(goal):
             cell = table[alt.value]["target" if alt.id == answer else "distractor"]
             cell[str(alt.slot)] = cell.get(str(alt.slot), 0) + 1
     return {

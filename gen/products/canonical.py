@@ -1,4 +1,5 @@
-"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal), or
+"""`python -m gen.canonical world=libero_object` (or libero_spatial, libero_goal, or a world of
+LIBERO-10's, whose tasks span several: libero_10_living_room takes those set in its living room), or
 `suite=<a LIBERO-PRO suite>` (libero_object_swap, libero_spatial_lan, ...): an exam on LIBERO's
 own initial states.
 
@@ -37,7 +38,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from core import exam, libero, profiles, programs, worlds
+from core import exam, libero, libero_goals, profiles, programs, worlds
 from core.profiles import STATE_KEY, TASK_KEY
 from core.rotations import yaw_of
 from core.spec import FAST, LOOKS, Counterfactual, EpisodeSpec, SceneObject, Setup
@@ -170,7 +171,8 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
             return f"world {world.name} has no kind for {', '.join(shipped)} yet (core/libero.py)"
         return f"no model of {', '.join(missing)} is installed (LIBERO-PRO registers it but ships no file)"
     furniture = {f.fixture.kind for f in world.fixtures}
-    other = sorted(set(problem.fixtures.values()) - furniture - {"table", "floor"})
+    tables = {f for f in problem.fixtures.values() if f.endswith("table")}  # the world's own table (LIBERO's kinds of it)
+    other = sorted(set(problem.fixtures.values()) - furniture - tables - {"floor"})
     if other:
         return f"its furniture ({', '.join(other)}) is not world {world.name}'s"
     moved = _moved_fixtures(problem, libero.problem(world.suite, libero.base_task(suite, task)))
@@ -180,6 +182,8 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
     design = referent.code.canonical(referent.config, problem)
     if design is None:
         goal = f"{problem.goal[0][0]} {' '.join(problem.goal[0][1:])}"
+        if len(problem.goal) > 1 and libero_goals.goals(problem, world) is not None:  # a LIBERO-10 task our programs do
+            return f"referent type {referent.name} lays out no swap of it ({goal}, ...: our programs do its goals)"
         return f"our skills cannot do it ({goal}: docs/LIBERO.md says which tasks each world covers)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
@@ -229,6 +233,8 @@ def suite_of(options: CanonicalOptions) -> Suite:
         raise UserError(f"world={world.name}: {exc}") from None
     if options.world and options.suite and base != world.suite:
         raise UserError(f"suite={options.suite} perturbs {base}, not world={options.world}: leave world= out")
+    if options.world and not options.suite:
+        name = world.suite  # its own suite's tasks, those of its scenes where the suite's span several worlds
     if name not in libero.suites(world.suite):
         raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
     chosen = _task_type(world.name)
@@ -237,7 +243,7 @@ def suite_of(options: CanonicalOptions) -> Suite:
             f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}"
         )
     referent = registry.load(chosen)
-    why = {task: _why_not(world, referent, name, task) for task in libero.tasks(name)}
+    why = {task: _why_not(world, referent, name, task) for task in libero.tasks(name) if world.stands(task)}
     covered = tuple(task for task, reason in why.items() if reason is None)
     if not covered:
         reasons = Counter(why.values()).most_common(1)[0][0]

@@ -135,8 +135,8 @@ def switch_rows(
         return (), "what the oracle acts on never moves in its demonstration: no approach to switch in"
     kept, missed = [], []
     for choice in choices:
-        target, program = spec.choice(spec.counterfactuals[choice])
-        asked = replace(spec, target=target, task=replace(spec.task, program=program))
+        cf = spec.counterfactuals[choice]
+        asked = spec.asking(*spec.choice(cf), cf.goal)
         then = demonstrate(scene, ik, asked, referent.demo, np.asarray(state), settle, demo.actions[:step])
         if then.success:
             kept.append(exam.Switch(choice, step))

@@ -28,6 +28,10 @@ Commands (the request is JSON; what comes back is written to <out>):
   action and each object's final position. With a `"suite"` (a table suite: libero_spatial,
   libero_goal) the problem is instead that suite's own table and fixtures holding the request's
   objects, with goal `(On <target> <container>)`, its fixtures posed as the request's `fixtures` say.
+  With a `"task"` too (a task of the suite whose scene holds every object of the request: LIBERO-10's
+  living room), the environment is that task's own BDDL file, and each episode's `goals` (a list of
+  BDDL words each: both of a "put both") are judged one by one (`goals`: [[words], true or false]),
+  `success` when all hold.
 * `task_replay` — {"suite", "cases": [{"task", "state", "actions", "places", "fixtures"}, ...]}: each
   case's actions stepped in LIBERO's environment of the suite's task (its own BDDL file) from its
   initial state number `state`, its fixtures standing where `fixtures` says ([name, x, y, z, qw, qx,
@@ -173,6 +177,8 @@ def _environment(request: dict, objects: dict[str, str], episode: dict, tmp: str
     """LIBERO's environment holding `objects`: LIBERO's floor scene, or with a `suite` that suite's
     table (its fixtures), with the episode's goal."""
     suite = request.get("suite")
+    if "task" in request:
+        return make_env(task_bddl(suite, request["task"])[0], size, cameras)
     goal = _goal(suite, episode)
     bddl = os.path.join(tmp, f"{abs(hash(goal))}.bddl")
     with open(bddl, "w") as f:
@@ -196,7 +202,7 @@ def replay(request: dict, out: str) -> None:
     objects = {o["instance"]: o["kind"] for e in episodes for o in e["objects"]}
     goals: dict[str, list[int]] = {}
     for i, e in enumerate(episodes):
-        goals.setdefault(_goal(request.get("suite"), e), []).append(i)
+        goals.setdefault(request.get("task") or _goal(request.get("suite"), e), []).append(i)
     results: list = [None] * len(episodes)
     with tempfile.TemporaryDirectory() as tmp:
         for indices in goals.values():
@@ -211,6 +217,9 @@ def replay(request: dict, out: str) -> None:
                 results[i] = {
                     "success": bool(env.check_success()), "objects": positions(env), "joints": articulations(env), "hand": hand,
                 }  # fmt: skip
+                if "goals" in episodes[i]:  # judged by the episode's own goals, not the task's
+                    judged = [[g, bool(env.env._eval_predicate([g[0].lower(), *g[1:]]))] for g in episodes[i]["goals"]]
+                    results[i].update(goals=judged, success=all(ok for _, ok in judged))
             env.close()
     with open(out, "w") as f:
         json.dump(results, f)
