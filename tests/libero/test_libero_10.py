@@ -354,7 +354,7 @@ def test_the_living_rooms_canonical_exam_holds_its_put_both_tasks(shared: Shared
 @pytest.mark.reference
 def test_the_oracle_does_the_living_rooms_canonical_exam_and_the_remembered_layout_reads_no_name(shared: Shared) -> None:
     """On LIBERO's own first states of the three "put both" tasks the oracle does every task and most
-    swaps (the ketchup, 14.6 cm tall, once let down on the basket's rim); the remembered layout
+    swaps (10 of 12: "the alphabet soup and the ketchup", "the milk and the butter" missed); the remembered layout
     (`position`: a scene's groceries say which task, the first by name where two share one) does the
     tasks whose scene it knows and no swap; `nothing` does nothing. A swap is read at its `achieved`
     level (the whole renamed ask done): the hand lands on the kept name's grocery whichever it read."""
