@@ -1,8 +1,9 @@
 """LIBERO-10's "put both" axis: two named groceries into the basket, one after the other (see
 libero_10.yaml beside it).
 
-An episode is a task of two goals (core/spec.py THEN): the first named grocery into the basket,
-then the second, side by side as the basket's kind says (`Kind.beside`). The first, the second and
+An episode is a task of two goals (core/spec.py THEN): both named groceries into the basket, the
+shorter first (the words leave the order free), side by side as the basket's kind says
+(`Kind.beside`). The first named, the second named and
 the distractors are balanced apart (each grocery first, second and a distractor equally often, each
 in every slot), and the audit reads both goals (gen/planning/audit.py), so neither name is
 predicted by where things stand. A swap changes one of the two names to a distractor's
@@ -70,7 +71,7 @@ def design(cfg: ReferentConfig, balance: Balance) -> Design:
     while len(chosen) < cfg.objects_per_scene:
         chosen.append(balance.pick("distractor", [c for c in groceries if c not in chosen]))
     placements: list[Placement] = []
-    for role, cand in zip(("target", "second", "distractor", "distractor"), chosen):
+    for role, cand in zip(("target", "second", *["distractor"] * (len(chosen) - 2)), chosen):
         free = [s for s in range(len(cfg.layout.slots) - 1) if s not in {p.slot for p in placements}]
         placements.append(Placement(slug(cand.key), cand, balance.pick((role, "slot", cand.key), free, also="slot")))
     basket = Placement(slug(_basket(cfg).key), _basket(cfg), len(cfg.layout.slots) - 1)
