@@ -24,6 +24,7 @@ from typing import Any
 from core import programs
 from core.catalog import Kind
 from core.libero import Problem
+from core.spec import THEN, TaskSpec
 from core.worlds import World
 
 CONTAIN = "_contain_region"  # LIBERO's region of a container object (a basket) that `In` asks for
@@ -46,6 +47,14 @@ def goals(problem: Problem, world: World) -> tuple[Goal, ...] | None:
         return None
     ordered = sorted((g for g in found if g is not None), key=_rank)
     return tuple(_side_by_side(ordered, problem, world))
+
+
+def task(goals: tuple[Goal, ...]) -> TaskSpec:
+    """Goals as one spec's task: the first's program and params, the others in `params["then"]`
+    (core/spec.py EpisodeSpec.goals); the first's target is the spec's."""
+    first, *rest = goals
+    then = [{"program": g.program, "target": g.target, "params": g.params} for g in rest]
+    return TaskSpec(first.program, params={**first.params, THEN: then} if then else dict(first.params))
 
 
 def _goal(predicate: tuple[str, ...], problem: Problem, world: World) -> Goal | None:

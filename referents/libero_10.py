@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from core import libero, libero_goals, worlds
+from core.libero_goals import Goal
 from core.spec import THEN, Counterfactual, EpisodeSpec, TaskSpec
 from referents import scenery
 from referents.balance import Balance
@@ -58,9 +59,9 @@ def validate(cfg: ReferentConfig) -> None:
 def _task(cfg: ReferentConfig, first: str, second: str, basket: str, basket_kind: str) -> TaskSpec:
     """Both into the basket, the first then the second, side by side."""
     kind = worlds.world(cfg.world).kind(basket_kind)
-    program = cfg.task.program
-    then = [{"program": program, "target": second, "params": {"destination": basket, "at": kind.beside(1)}}]
-    return TaskSpec(program=program, params={"destination": basket, "at": kind.beside(0), THEN: then})
+    return libero_goals.task(
+        tuple(Goal(cfg.task.program, t, {"destination": basket, "at": kind.beside(i)}) for i, t in enumerate((first, second)))
+    )
 
 
 def design(cfg: ReferentConfig, balance: Balance) -> Design:
@@ -126,9 +127,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
         return None
     placements = []
     for instance, kind in problem.objects.items():
-        x, y = problem.centre(problem.region_of(instance))
-        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in cfg.layout.slots]))
-        placements.append(Placement(instance, scenery.candidate(cfg, kind), slot))
+        placements.append(Placement(instance, scenery.candidate(cfg, kind), scenery.nearest_slot(cfg, problem, instance)))
     ids = [g.target for g in goals]
     words = [scenery.candidate(cfg, problem.objects[i]).name for i in ids]
     instruction = libero.language(problem.name)
@@ -137,12 +136,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
         Counterfactual(instruction.replace(words[k % 2], p.candidate.name, 1), p.id, (words[k % 2], p.candidate.name), goal=k % 2)
         for k, p in enumerate(others)
     )
-    first, second = goals
-    task = TaskSpec(
-        program=first.program,
-        params={**first.params, THEN: [{"program": second.program, "target": second.target, "params": second.params}]},
-    )
-    return Design(tuple(placements), first.target, cfg.templates[0], instruction, swaps, task)
+    return Design(tuple(placements), goals[0].target, cfg.templates[0], instruction, swaps, libero_goals.task(goals))
 
 
 def _layouts(cfg: ReferentConfig) -> list[tuple[frozenset[str], tuple[tuple[float, float], ...]]]:

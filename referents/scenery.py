@@ -10,9 +10,13 @@ stands in the scene but is never named by a swap.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from core import worlds
+from core.libero import Problem
 from referents.schema import Candidate, ReferentConfig
 
 SCENERY = "scenery"  # the role of an object no candidate of the type is
@@ -32,3 +36,11 @@ def candidate(cfg: ReferentConfig, kind: str) -> Candidate:
         if c.kind == base_kind(cfg, kind):
             return replace(c, kind=kind)
     return Candidate(kind, worlds.world(cfg.world).kind(kind).noun, role=SCENERY)
+
+
+def nearest_slot(cfg: ReferentConfig, problem: Problem, instance: str, among: Sequence[int] | None = None) -> int:
+    """The layout slot (of `among`, default all) nearest the centre of the region a LIBERO problem
+    stands `instance` in: where a type's `canonical` design puts it until LIBERO's state poses it."""
+    x, y = problem.centre(problem.region_of(instance))
+    slots = list(range(len(cfg.layout.slots))) if among is None else list(among)
+    return slots[int(np.argmin([np.hypot(x - cfg.layout.slots[s][0], y - cfg.layout.slots[s][1]) for s in slots]))]

@@ -91,11 +91,11 @@ def landable(spec: EpisodeSpec, alternatives: list[tuple[str, str]]) -> list[tup
     return [(o.id, program) for o in spec.objects if o.id not in kept and not worlds.kind(o.kind, spec.setup.world).is_site]
 
 
-def _landing(row: pd.Series) -> str:
+def _landing(spec: EpisodeSpec) -> str:
     """The level a swap or switch row is read at: where the hand lands (5 cm), or for a task of more
     goals (LIBERO-10's "put both"), whether the whole ask was done: there the hand lands on the kept
     name's object whichever name it read."""
-    return "achieved" if len(EpisodeSpec.from_json(row["spec"]).goals()) > 1 else "5cm"
+    return "achieved" if len(spec.goals()) > 1 else "5cm"
 
 
 def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
@@ -280,22 +280,22 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             faces[name].append({"trial": trial, "ok": levels[headline], "init": init, "chance": chance, "levels": levels})
             return levels[headline]
 
-        landing = _landing(row)
+        spec = EpisodeSpec.from_json(row["spec"])
+        landing = _landing(spec)
         if face == "swap":
             ok = count("obeyed_name", asked, landing)
             count("true_target", original, landing)
             count("swap_success", asked, "achieved")
             distances.append((judged[asked]["distance"], judged[original]["distance"]))
             if located is not None:
-                nearest = _nearest(EpisodeSpec.from_json(row["spec"]), objects, located)
+                nearest = _nearest(spec, objects, located)
                 grounding.append((float(nearest == row["target"]), trial, chance))
         elif face == "switch":  # scored as a swap: the newly named one, or on to the original (blind)
             ok = count("switch_obeyed", asked, landing)
             count("switch_blind", original, landing)
         else:
             ok = count(face, asked, "achieved")
-            spec = EpisodeSpec.from_json(row["spec"]) if face == "task" else None
-            if spec is not None and len(spec.goals()) > 1:  # each goal of a task of more, done at the end
+            if face == "task" and len(spec.goals()) > 1:  # each goal of a task of more, done at the end
                 done = programs.each(spec, logged_outcome(ee, objects, len(ee) - 1, turns))
                 partial.append(([g and not error for g in done], trial))
         if predicted is not None and face in PREDICTED_FACES:
@@ -488,13 +488,15 @@ def exam_label(exam: Exam) -> str:
 
 
 def swaps_obeyed(exam: Exam, logs: pd.DataFrame) -> dict[int, bool]:
-    """Each swap rollout's row -> whether it landed on the named object (5 cm), as `score` counts
-    obeyed name: what lets two policies' swaps be compared row by row."""
+    """Each swap rollout's row -> whether it landed on the named object (5 cm; a task of more goals:
+    achieved the renamed ask, `_landing`), as `score` counts obeyed name: what lets two policies'
+    swaps be compared row by row."""
     parsed, obeyed = parsed_logs(logs, exam), {}
     for _, row in exam.trials[exam.trials["face"] == "swap"].iterrows():
         log = parsed[int(row["row"])]
         judged = judge(exam, row, log.ee, log.objects, turns=log.turns)
         asked = (row["target"], row["program"])
-        read = judged[asked]["achieved"] if LEVELS[_landing(row)] is None else landed(judged) == asked
+        at = LEVELS[_landing(EpisodeSpec.from_json(row["spec"]))]
+        read = judged[asked]["achieved"] if at is None else landed(judged) == asked
         obeyed[int(row["row"])] = not log.error and read
     return obeyed

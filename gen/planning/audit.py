@@ -33,11 +33,11 @@ MIN_EPISODES = 20
 AUDIT_VERSION = 1
 
 
-def _table(referent: Referent, specs: Sequence[EpisodeSpec]) -> tuple[pd.DataFrame, dict[str, Family]]:
-    """One row per (episode, alternative, variable); and each variable's families."""
+def _table(referent: Referent, goals: Sequence[EpisodeSpec]) -> tuple[pd.DataFrame, dict[str, Family]]:
+    """One row per (goal, alternative, variable); and each variable's families."""
     rows = []
     families: dict[str, Family] = defaultdict(lambda: Family.NONE)
-    for i, goal in enumerate(_goals(specs)):
+    for i, goal in enumerate(goals):
         answer = referent.answer(goal)
         for alt in referent.alternatives(goal):
             for var, variable in alt.variables.items():
@@ -85,8 +85,9 @@ def expected_leaks(referent: Referent) -> Family:
 
 def audit(referent: Referent, specs: Sequence[EpisodeSpec]) -> dict:
     """The audit as JSON-ready data; see module docstring."""
-    n = len(_goals(specs))
-    df, families = _table(referent, specs)
+    goals = _goals(specs)
+    n = len(goals)
+    df, families = _table(referent, goals)
     per_episode = df.drop_duplicates(["episode", "alt"]).groupby("episode").size()
     chance = float((1.0 / per_episode).mean())
     expected = expected_leaks(referent)

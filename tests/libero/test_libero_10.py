@@ -17,7 +17,7 @@ from core import libero, libero_goals, programs, worlds
 from core.exam import read
 from core.furniture import Spot
 from core.libero_goals import Goal
-from core.spec import FAST, LOOKS, THEN, EpisodeSpec, SceneObject, Setup, TaskSpec
+from core.spec import FAST, LOOKS, EpisodeSpec, SceneObject, Setup
 from core.success import Outcome
 from eval.sims.libero import fixture_poses
 from eval.sims.libero_env.reference import model_arrays  # the same readout on both models
@@ -185,12 +185,11 @@ def _goals_spec(task: str, state: int, scene: Scene, setup: Setup) -> tuple[Epis
     they stand shut (the state opens a drawer); the first goal the spec's target, the others in
     `task.params["then"]`. Returns the spec and the physics state."""
     problem, sites = libero.problem(SUITE, task), _sites(task)
-    first, *rest = _goals(task)
-    then = [{"program": g.program, "target": g.target, "params": g.params} for g in rest]
+    goals = _goals(task)
     objects = tuple(SceneObject(i, k, k, 0, (0.0, 0.0, 1.0)) for i, k in (*problem.objects.items(), *((s, s) for s in sites)))
     spec = EpisodeSpec(
-        SUITE, state, 0, objects, first.target, libero.language(task), "", (), _inventory(task),
-        task=TaskSpec(first.program, params={**first.params, THEN: then}), setup=setup, split="exam",
+        SUITE, state, 0, objects, goals[0].target, libero.language(task), "", (), _inventory(task),
+        task=libero_goals.task(goals), setup=setup, split="exam",
     )  # fmt: skip
     vector = libero.initial_states(SUITE, task)[state]
     scene.reset(spec)

@@ -299,12 +299,9 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem, template: str | None
     if task is None:
         return None
     program, carried, place = task
-    slots = cfg.layout.slots
     placements = []
     for instance, kind in problem.objects.items():
-        x, y = problem.centre(problem.region_of(instance))
-        table = _table_slots(cfg)
-        slot = table[int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy, *_ in (slots[s] for s in table)]))]
+        slot = scenery.nearest_slot(cfg, problem, instance, _table_slots(cfg))
         placements.append(Placement(instance, scenery.candidate(cfg, kind), slot))
     placements += _fixed(cfg)
     ids = {p.candidate.name: p.id for p in placements}

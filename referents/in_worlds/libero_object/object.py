@@ -82,8 +82,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design:
     container = _container(cfg)
     placements = []
     for instance, kind in problem.objects.items():
-        x, y = problem.centre(problem.region_of(instance))
-        slot = int(np.argmin([np.hypot(x - sx, y - sy) for sx, sy in cfg.layout.slots]))
+        slot = scenery.nearest_slot(cfg, problem, instance)
         known = scenery.base_kind(cfg, kind) == container.kind
         placements.append(Placement(kind, replace(container, kind=kind) if known else scenery.candidate(cfg, kind), slot))
     target = problem.objects[problem.goal[0][1]]  # (In <target> <container>_contain_region)
