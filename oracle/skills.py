@@ -20,6 +20,7 @@ from oracle.motion import CLOSED
 RETREAT = 0.1  # how far the hand rises from where it let go
 REACH_STEP = 0.01  # how far at a time a release point out of reach moves toward the robot
 SWIFT_LIFT = 0.15  # the highest lift made as one time-optimal joint move
+OVER_RIM = 0.025  # how far over a container's rim the grip site stays as it lets go inside (the fingertips clear the rim)
 # how far at a time, and how many times, a held object slides out from under something; how far clear of it
 UNDER_STEP, UNDER_STEPS, UNDER_MARGIN = 0.03, 5, 0.01
 # a dish dragged by its inner wall: the wall's thickness, how far behind its centre the fingers come
@@ -134,6 +135,8 @@ class Skills(FurnitureSkills):
         destination = self._kind(destination_id)
         release_z = contact.release_point(destination, self.scene.object_pos(destination_id), self._kind(self.held[0]))[2]
         release_z += destination.drawer.drop if destination.drawer else 0.0
+        if destination.walled:  # down inside, over its floor: a tall carton dropped from over the rim tips against a wall
+            release_z = min(release_z, max(self._lowest_release(destination_id), self.top_of(destination_id)[2] + OVER_RIM))
         over_all = self.clearance_along(over) if held.handle is not None else self.clearance()
         carry_z = max(self.scene.ee_pos()[2], release_z + 0.06, over_all + self.held[1])
         over = self._within_reach(over, max(carry_z, release_z + RETREAT), destination_id)
@@ -156,6 +159,13 @@ class Skills(FurnitureSkills):
         self.open()
         self.placed = True
         self.move_to([over[0], over[1], release_z + RETREAT])
+
+    def _lowest_release(self, container_id: str) -> float:
+        """The grip site's height when the held thing is let go PLACE_CLEARANCE over the container's floor
+        (the bottom of its `contain` box)."""
+        centre, half = self._kind(container_id).contain
+        floor = self.scene.object_pos(container_id)[2] + centre[2] - half[2]
+        return floor + contact.grip_height(self._kind(self.held[0])) + contact.PLACE_CLEARANCE
 
     def _within_reach(self, over: np.ndarray, height: float, destination_id: str) -> np.ndarray:
         """`over`, or where the hand cannot reach that high there (a tall bottle carried over the
