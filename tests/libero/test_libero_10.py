@@ -375,13 +375,13 @@ def test_the_living_rooms_canonical_exam_holds_its_put_both_tasks(shared: Shared
 @pytest.mark.reference
 def test_the_oracle_does_the_living_rooms_canonical_exam_and_the_remembered_layout_reads_no_name(shared: Shared) -> None:
     """On LIBERO's own first states of the three "put both" tasks the oracle does every task and most
-    swaps (10 of 12: "the alphabet soup and the ketchup", "the milk and the butter" missed); the remembered layout
+    swaps (12 of 12 since a basket is entered, not dropped into; 10 before), at least the 90% asked; the remembered layout
     (`position`: a scene's groceries say which task, the first by name where two share one) does the
     tasks whose scene it knows and no swap; `nothing` does nothing. A swap is read at its `achieved`
     level (the whole renamed ask done): the hand lands on the kept name's grocery whichever it read."""
     reports = canonical_reports(shared, {"oracle": 3, "position": 3, "nothing": 1}, LIVING_ROOM)
     faces = {policy: report["faces"] for policy, report in reports.items()}
-    assert faces["oracle"]["task"]["k"] == 3 and faces["oracle"]["obeyed_name"]["rate"] >= 0.7, faces["oracle"]
+    assert faces["oracle"]["task"]["k"] == 3 and faces["oracle"]["obeyed_name"]["rate"] >= 0.9, faces["oracle"]
     assert faces["position"]["task"]["k"] == 2 and faces["position"]["obeyed_name"]["k"] == 0, faces["position"]
     assert all(f["k"] == 0 for f in faces["nothing"].values())
     assert reports["oracle"]["partial"]["done"] == {"1+2": 3}
