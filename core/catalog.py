@@ -71,9 +71,9 @@ class Kind:
     variant_of: str = ""  # the kind this one recolours or resizes (LIBERO-PRO's copies): what it is called, and stands for
     called: str = ""  # what a person calls it, where that is not its name's words (`yellow mug`)
     neck: bool = False  # held by a narrow neck (a bottle): it swings, so it is carried gently (oracle/motion.py GENTLE)
-    # where two things brought to it stand (LIBERO-10's "put both ..."): the first and the second, each
-    # this far (x, y) from its centre (core/libero_goals.py); None: both at its centre
-    side_by_side: tuple[tuple[float, float], tuple[float, float]] | None = None
+    # where two things brought to it stand (LIBERO-10's "put both ..."): this far (x, y) from its centre,
+    # the first one way, the second the other (core/libero_goals.py); None: both at its centre
+    side_by_side: tuple[float, float] | None = None
     spot: Spot | None = None  # a place on a fixture: where it is
     drawer: Drawer | None = None
     knob: Knob | None = None
@@ -103,9 +103,12 @@ class Kind:
         return found
 
     def beside(self, nth: int) -> list[float] | None:
-        """Where the `nth` (0 or 1) of two things brought to it stands, from its centre
-        (`side_by_side`); None: at its centre."""
-        return None if self.side_by_side is None else list(self.side_by_side[nth])
+        """Where the `nth` (0 or 1) of two things brought to it stands, from its centre (`side_by_side`:
+        the first one way, the second the other); None: at its centre."""
+        if self.side_by_side is None:
+            return None
+        sign = 1.0 if nth == 0 else -1.0
+        return [sign * v for v in self.side_by_side]
 
     @property
     def anchor(self) -> str:

@@ -47,6 +47,12 @@ def release_point(destination: Kind, pos: np.ndarray, carried: Kind) -> np.ndarr
     return np.stack([over[..., 0], over[..., 1], over[..., 2] + grip_height(carried) + PLACE_CLEARANCE], axis=-1)
 
 
+def floor(container: Kind, pos: np.ndarray) -> float:
+    """The height of a container's floor (the bottom of its `contain` box) standing upright at `pos`."""
+    centre, half = container.contain
+    return float(np.asarray(pos, dtype=float)[2] + centre[2] - half[2])
+
+
 def distance(kind: Kind, pos: np.ndarray, ee: np.ndarray, carried: Kind | None = None) -> np.ndarray:
     """(T,) distances of the grip site `ee` from where it meets an object of `kind` at `pos`: where it
     is held (`grasp_distance`), or, when the hand brings `carried` there, the release point over it."""

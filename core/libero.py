@@ -112,7 +112,7 @@ KINDS: dict[str, Kind] = {
             contain_quat=(HALF, 0.0, 0.0, -HALF),
             # two cans (6.2 cm across) across its box (12.2): each as far out as the box holds it (LIVING_ROOM_SCENE2's
             # soup and sauce, 9 of 10 in; the second stood on the first at the centre, its origin above the box, 7)
-            side_by_side=((0.0, 0.03), (0.0, -0.03)),
+            side_by_side=(0.0, 0.03),
         ),
         # LIBERO-Spatial's table: the bowls are picked by the rim (`rim`: the wall's distance from the
         # centre), the plate is where they go (LIBERO's `On` wants the bowl's origin within 3 cm of its)
@@ -127,7 +127,7 @@ KINDS: dict[str, Kind] = {
         # two moka pots (8.1 cm across) side by side on it, clear of each other within its 15 cm region (KITCHEN_SCENE8)
         replace(
             _on_fixture("stove_burner", "flat_stove_1_cook_region", (0.075, 0.075, 0.0025), 0.0221, 0.07),
-            side_by_side=((0.045, 0.0), (-0.045, 0.0)),
+            side_by_side=(0.045, 0.0),
         ),
         _on_fixture("cabinet_top", "wooden_cabinet_1_top_side", (0.12534, 0.09438, 0.00147), 0.0015, 0.09),
         # LIBERO-Goal's wine rack: its top shelf, a plank sloping up toward the rack's back, LIBERO's

@@ -163,8 +163,7 @@ class Skills(FurnitureSkills):
     def _lowest_release(self, container_id: str) -> float:
         """The grip site's height when the held thing is let go PLACE_CLEARANCE over the container's floor
         (the bottom of its `contain` box)."""
-        centre, half = self._kind(container_id).contain
-        floor = self.scene.object_pos(container_id)[2] + centre[2] - half[2]
+        floor = contact.floor(self._kind(container_id), self.scene.object_pos(container_id))
         return floor + contact.grip_height(self._kind(self.held[0])) + contact.PLACE_CLEARANCE
 
     def _within_reach(self, over: np.ndarray, height: float, destination_id: str) -> np.ndarray:

@@ -225,7 +225,7 @@ def predicate(spec: EpisodeSpec, row_start: RowStart, target: str, program: str)
     else:
         return None
     kind = worlds.kind(spec.object(destination).kind, spec.setup.world)
-    if kind.contain is not None and not kind.is_site:  # a container; a region of the table is `On`
+    if kind.walled:  # a container; a region of the table is `On`
         return ["In", where[moved], f"{where[destination]}_contain_region"]
     return ["On", where[moved], where[destination]]
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core import libero, libero_goals, programs, worlds
+from core import contact, libero, libero_goals, programs, worlds
 from core.exam import read
 from core.furniture import Spot
 from core.libero_goals import Goal
@@ -341,8 +341,7 @@ def test_a_tall_carton_is_let_down_inside_the_basket_not_dropped_over_its_rim() 
     assert len(let_go) == 2
     scene.set_physics_state(demo.states[let_go[1]])
     ketchup, basket = spec.goals()[1].target, spec.task.params["destination"]
-    centre, half = worlds.kind("basket", world.name).contain
-    floor = scene.object_pos(basket)[2] + centre[2] - half[2]
+    floor = contact.floor(worlds.kind("basket", world.name), scene.object_pos(basket))
     fell = scene.object_pos(ketchup)[2] - worlds.kind("ketchup", world.name).bottom - floor
     assert fell < 0.06, f"the ketchup let go {fell * 100:.1f} cm over the basket's floor"
 
