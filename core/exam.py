@@ -121,10 +121,12 @@ def scoring() -> dict[str, Any]:
     }
 
 
-def geometry(world: str = "native") -> dict[str, dict[str, Any]]:
-    """Every object kind of the exam's world: what the scorer needs to judge a log without our simulator."""
-    out = {}
-    for k in worlds.world(world).kinds.values():
+def geometry(*names: str) -> dict[str, dict[str, Any]]:
+    """Every object kind of the exam's world (or worlds, LIBERO-10's: their kinds are one catalog's):
+    what the scorer needs to judge a log without our simulator."""
+    out: dict[str, dict[str, Any]] = {}
+    kinds = {k.name: k for name in names or ("native",) for k in worlds.world(name).kinds.values()}
+    for k in kinds.values():
         out[k.name] = {"size": list(k.size), "bottom": k.bottom, "grasp_depth": k.grasp_depth(), "inner": k.inner}
         if k.rim:
             out[k.name]["rim"] = k.rim
@@ -246,7 +248,7 @@ def write(root: Path, rows: list[dict], meta: dict[str, Any]) -> None:
         "rollouts": len(rows),
         "faces": FACES,
         "scoring": scoring(),
-        "geometry": geometry(meta.get("world", "native")),
+        "geometry": geometry(*meta.get("worlds", [meta.get("world", "native")])),
         "created_with": {
             "generator": __version__,
             "mujoco": metadata.version("mujoco"),

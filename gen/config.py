@@ -330,6 +330,11 @@ def resolve_world(cfg: GenConfig) -> worlds.World:
                 f"types world {world.name} carries: {others}"
             )
         carriers = registry.worlds_of(cfg.referent)
+        if any(path.stem == cfg.referent for path in registry.tasks_only(world.name)):
+            raise UserError(
+                f"referent {cfg.referent} lays out only LIBERO's own tasks in world {world.name} (no scenes of its own): "
+                f"python -m gen.canonical world={world.name}; worlds where it generates: {', '.join(carriers)}"
+            )
         if world.name not in carriers:
             raise UserError(
                 f"referent {cfg.referent} has no design in world {world.name}; worlds that carry {cfg.referent}: "

@@ -5,7 +5,9 @@ A built-in type is `referents/<type>.yaml` + `referents/<type>.py`, in its own w
 the spec says otherwise). A type in another world is data, `referents/in_worlds/<world>/<type>.yaml`
 (that world's objects, places and wording for the type), with an optional module beside it,
 `<world>/<type>.py`, whose hooks override the type's (LIBERO-Object's object axis knows LIBERO's own
-tasks: its `canonical`, its shortcuts). `referent=<type> world=<world>` is the one grammar. A
+tasks: its `canonical`, its shortcuts). `referent=<type> world=<world>` is the one grammar. A world's
+spec that says `canonical_only: true` lays out that world's LIBERO tasks for gen.canonical and no
+scenes of its own (LIBERO-10's kitchens: `tasks_only`); `referent=` does not take it there. A
 world's spec may record its episodes under a name of its own (`type: libero_object`), kept from
 when it was a type of its own; `referent=libero_object` is that name, an alias of
 `referent=object world=libero_object`, and both record the same. A spec file given by path may
@@ -33,7 +35,7 @@ from referents.variables import Alternative
 
 __all__ = [
     "HERE", "IN_WORLDS", "Referent", "UnknownReferent", "available", "carried_by", "demo_of", "load", "of_world", "own_name",
-    "spec_file", "types", "world_of", "worlds_of",
+    "spec_file", "tasks_only", "types", "world_of", "worlds_of",
 ]  # fmt: skip
 
 HERE = Path(__file__).parent
@@ -51,9 +53,27 @@ def types() -> list[str]:
 
 @functools.cache
 def _in_worlds() -> dict[Path, tuple[str, str, str]]:
-    """Every spec of a type in another world than its own: its file -> (type, world, the name its
-    episodes record)."""
-    return {p: (p.stem, p.parent.name, _field(p, "type", p.stem)) for p in sorted(IN_WORLDS.glob("*/*.yaml"))}
+    """Every spec of a type in another world than its own that lays out scenes there: its file ->
+    (type, world, the name its episodes record). Those that lay out that world's LIBERO tasks only
+    are `tasks_only`'s."""
+    found = sorted(p for p in IN_WORLDS.glob("*/*.yaml") if not _canonical_only(p))
+    return {p: (p.stem, p.parent.name, _field(p, "type", p.stem)) for p in found}
+
+
+def _canonical_only(path: Path) -> bool:
+    """Whether a world's spec of a type says `canonical_only: true`: it lays out that world's LIBERO
+    tasks on LIBERO's own states (gen.canonical), and no scenes of its own (a LIBERO-10 kitchen,
+    whose one carriable thing leaves nothing to name)."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError):
+        return False
+    return isinstance(data, dict) and data.get("canonical_only") is True
+
+
+def tasks_only(world: str) -> list[Path]:
+    """The specs that lay out `world`'s LIBERO tasks and no scenes of their own (`_canonical_only`)."""
+    return [p for p in sorted((IN_WORLDS / world).glob("*.yaml")) if _canonical_only(p)]
 
 
 def _alias(name: str) -> Path | None:

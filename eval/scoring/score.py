@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from core import contact, programs, worlds
+from core.catalog import Kind
 from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, decode_objects, goal_of
 from core.products import EXAM_PATH
 from core.programs import achieved
@@ -211,12 +212,20 @@ def _starts(row: pd.Series) -> list[dict[str, np.ndarray]]:
     (a loop that logs the settle steps, as ours does) or after the settle steps (what the
     gymnasium env's `reset()` returns), each as {name: position}."""
     spec = EpisodeSpec.from_json(row["spec"])
-    starts = [{"the end effector": np.asarray(row["initial_ee"], float), **{o.id: np.asarray(o.pos) for o in spec.objects}}]
+    # a drawer or a door is recorded where it stands shut (success.closed), which LIBERO-10's states may leave it open from
+    shut = {o.id for o in spec.objects if _articulated(worlds.kind(o.kind, spec.setup.world))}
+    recorded = {o.id: np.asarray(o.pos) for o in spec.objects if o.id not in shut}
+    starts = [{"the end effector": np.asarray(row["initial_ee"], float), **recorded}]
     settled = json.loads(row["settled_start"] or "{}")
     if settled:
         objects = {k: np.asarray(v, float) for k, v in settled["objects"].items()}
         starts.append({"the end effector": np.asarray(settled["ee"], float), **objects})
     return starts
+
+
+def _articulated(kind: Kind) -> bool:
+    """A place that slides or swings (a drawer, a door), not one that stays where it is recorded."""
+    return kind.drawer is not None or kind.door is not None
 
 
 def _off(start: dict[str, np.ndarray], ee: np.ndarray, objects: dict[str, np.ndarray]) -> tuple[str, str] | None:

@@ -70,11 +70,12 @@ def _read_frame(stream):  # noqa: ANN001, ANN202
 def check(exam: Exam, policy: str) -> None:
     """Refuse, before any rollout, what `sim=libero` cannot take: an exam outside LIBERO's worlds, a
     privileged reference policy, a machine without LIBERO's environment."""
-    world = exam.meta.get("world", "native")
-    if not worlds.world(world).suite:
+    outside = [w for w in exam.meta.get("worlds", [exam.meta.get("world", "native")]) if not worlds.world(w).suite]
+    if outside:
         libero_worlds = ", ".join(w for w in worlds.names() if worlds.world(w).suite)
         raise SimUnavailable(
-            f"sim=libero runs exams of LIBERO's worlds ({libero_worlds}); this exam is of world {world}: take it without sim="
+            f"sim=libero runs exams of LIBERO's worlds ({libero_worlds}); this exam is of world {outside[0]}: "
+            "take it without sim="
         )
     key = policy.partition(":")[0]
     if key in PRIVILEGED:
@@ -152,20 +153,22 @@ class RowStart:
     sites: tuple[str, ...]  # LIBERO site (or point on a body: Kind.anchor) of each of the rest
 
 
+def _site(spec: EpisodeSpec, kind: str) -> bool:
+    return worlds.kind(kind, spec.setup.world).is_site
+
+
 class Rows:
     """How an exam's rows start in LIBERO, worked out once per exam in the process that runs them."""
 
     def __init__(self, meta: dict, specs: list[EpisodeSpec]) -> None:
-        self.world = worlds.world(meta["world"])
+        # an exam's world; a canonical exam of LIBERO-10's tasks spans several (`worlds`: each spec names its own)
+        self.world = worlds.world(meta.get("world") or meta["worlds"][0])
         canonical = meta.get("canonical")
         self.suite = canonical["suite"] if canonical else None
         # a canonical exam's trials, in order: (task, LIBERO's initial state) (gen/canonical.py)
         self.cases = [(task, s) for task, states in canonical["states"].items() for s in states] if canonical else []
-        union = {o["instance"]: o["kind"] for spec in specs for o in spec.scene_record()["objects"] if not self._site(o["kind"])}
+        union = {o["instance"]: o["kind"] for spec in specs for o in spec.scene_record()["objects"] if not _site(spec, o["kind"])}
         self.union = dict(sorted(union.items()))
-
-    def _site(self, kind: str) -> bool:
-        return self.world.kind(kind).is_site
 
     def _followed(self, spec: EpisodeSpec) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
         """The spec's object ids, objects first then places on furniture, with LIBERO's instance of
@@ -174,8 +177,8 @@ class Rows:
             names = list(libero.problem(self.suite, self.cases[spec.index][0]).objects)
         else:
             names = [o["instance"] for o in spec.scene_record()["objects"]]
-        placed = [(o.id, name) for o, name in zip(spec.objects, names) if not self._site(o.kind)]
-        sites = [(o.id, self.world.kind(o.kind).anchor) for o in spec.objects if self._site(o.kind)]
+        placed = [(o.id, name) for o, name in zip(spec.objects, names) if not _site(spec, o.kind)]
+        sites = [(o.id, worlds.kind(o.kind, spec.setup.world).anchor) for o in spec.objects if _site(spec, o.kind)]
         return tuple(i for i, _ in placed + sites), tuple(n for _, n in placed), tuple(n for _, n in sites)
 
     def start(self, spec: EpisodeSpec) -> RowStart:
@@ -227,7 +230,7 @@ def predicate(spec: EpisodeSpec, row_start: RowStart, target: str, program: str)
     kind = worlds.kind(spec.object(destination).kind, spec.setup.world)
     if kind.walled:  # a container; a region of the table is `On`
         return ["In", where[moved], f"{where[destination]}_contain_region"]
-    return ["On", where[moved], where[destination]]
+    return ["On", where[moved], libero.place_name(kind, where[destination])]  # a point on a fixture: LIBERO's region
 
 
 class LiberoSim:
@@ -283,7 +286,7 @@ class LiberoSim:
         request = {"op": "reset", "seed": int(row["trial"]), "objects": row_start.objects, "sites": row_start.sites, **start}
         _, self._now = self._ask(request, arrays)
         self.row_start, self.spec = row_start, spec
-        self._containers = {o.id for o in spec.objects if self.rows.world.kind(o.kind).contain is not None}
+        self._containers = {o.id for o in spec.objects if worlds.kind(o.kind, spec.setup.world).contain is not None}
 
     def step(self, action: np.ndarray) -> None:
         _, self._now = self._ask({"op": "step", "images": False}, {"action": np.asarray(action, np.float64)})

@@ -87,12 +87,16 @@ class Suite:
         return libero.problem(self.name, task)
 
     def inventory(self) -> tuple[tuple[str, int], ...]:
-        """The bodies its scene compiles: the referent's, and every kind its covered tasks place, as
-        many as any task places."""
+        """The bodies its scene compiles: the referent's, every kind its covered tasks place, as
+        many as any task places, and the places on furniture their goals name."""
         most = Counter(dict(self.referent.assets()))
         for task in self.tasks:
             for kind, n in Counter(self.problem(task).objects.values()).items():
                 most[kind] = max(most[kind], n)
+            design = self.referent.code.canonical(self.referent.config, self.problem(task))
+            for p in design.placements if design else ():
+                if self.world.kind(p.candidate.kind).is_site:
+                    most[p.candidate.kind] = max(most[p.candidate.kind], 1)
         return tuple(sorted(most.items()))
 
     def instruction(self, task: str, base: str) -> str:
@@ -147,17 +151,28 @@ def _libero_worlds() -> str:
     return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
 
 
+def _base_suites() -> dict[str, list[str]]:
+    """Each LIBERO suite a world lays out -> those worlds (LIBERO-10's tasks span several)."""
+    found: dict[str, list[str]] = {}
+    for name in worlds.names():
+        if worlds.world(name).suite:
+            found.setdefault(worlds.world(name).suite, []).append(name)
+    return found
+
+
 def _all_suites() -> str:
-    return ", ".join(s for w in worlds.names() if worlds.world(w).suite for s in libero.suites(worlds.world(w).suite))
+    return ", ".join(s for base in _base_suites() for s in libero.suites(base))
 
 
 def _canonical_worlds() -> str:
     return ", ".join(name for name in worlds.names() if _task_type(name) is not None)
 
 
-def _task_type(world: str) -> str | None:
-    """The referent type of a world that lays out LIBERO's tasks (its `canonical` hook), or None."""
-    return next((r for r in registry.of_world(world) if registry.load(r).code.canonical is not None), None)
+def _task_type(world: str) -> Referent | None:
+    """The referent type that lays out a world's LIBERO tasks (its `canonical` hook): one of the
+    world's own types, or a spec there that does nothing else (registry.tasks_only); or None."""
+    loaded = [*map(registry.load, registry.of_world(world)), *(registry.load("", p) for p in registry.tasks_only(world))]
+    return next((r for r in loaded if r.code.canonical is not None), None)
 
 
 def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> str | None:
@@ -183,7 +198,10 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
     if design is None:
         goal = f"{problem.goal[0][0]} {' '.join(problem.goal[0][1:])}"
         if len(problem.goal) > 1 and libero_goals.goals(problem, world) is not None:  # a LIBERO-10 task our programs do
-            return f"referent type {referent.name} lays out no swap of it ({goal}, ...: our programs do its goals)"
+            return (
+                f"referent type {referent.name} does not lay it out ({goal}, ...: our programs do its goals; a place it names "
+                f"has no slot in the type's layout of world {world.name})"
+            )
         return f"our skills cannot do it ({goal}: docs/LIBERO.md says which tasks each world covers)"
     carried = design.task.params.get("object", design.target) if design.task else design.target
     carried_kind = world.kind(next(p.candidate.kind for p in design.placements if p.id == carried))
@@ -219,7 +237,7 @@ def suite_of(options: CanonicalOptions) -> Suite:
     """The options' suite, checked (bad input: UserError, one line)."""
     name = options.suite or (options.world or "libero_object")
     base = libero.base_suite(name)
-    if options.suite and base not in worlds.names():
+    if options.suite and base not in _base_suites():
         raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
     try:
         world = worlds.world(options.world or base)
@@ -237,12 +255,11 @@ def suite_of(options: CanonicalOptions) -> Suite:
         name = world.suite  # its own suite's tasks, those of its scenes where the suite's span several worlds
     if name not in libero.suites(world.suite):
         raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
-    chosen = _task_type(world.name)
-    if chosen is None:
+    referent = _task_type(world.name)
+    if referent is None:
         raise UserError(
             f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}"
         )
-    referent = registry.load(chosen)
     why = {task: _why_not(world, referent, name, task) for task in libero.tasks(name) if world.stands(task)}
     covered = tuple(task for task, reason in why.items() if reason is None)
     if not covered:
@@ -251,25 +268,58 @@ def suite_of(options: CanonicalOptions) -> Suite:
     return Suite(name, world, referent, covered, {t: r for t, r in why.items() if r is not None})
 
 
-def _options(options: CanonicalOptions) -> tuple[Suite, Path]:
-    suite = suite_of(options)
+def _spanned(options: CanonicalOptions) -> list[str]:
+    """The worlds of a suite whose tasks stand in several (LIBERO-10's: `world=libero_10`, or one of its
+    LIBERO-PRO suites without `world=`); [] for a suite of one world or a world named."""
+    base = libero.base_suite(options.suite or options.world or "")
+    spanned = _base_suites().get(base, [])
+    return spanned if len(spanned) > 1 and options.world in (None, base) else []
+
+
+def suites_of(options: CanonicalOptions) -> tuple[tuple[Suite, ...], dict[str, str]]:
+    """The options' suite, one per world its tasks stand in (LIBERO-10's span six), with the tasks of
+    worlds that lay out none of them and why (task -> reason)."""
+    spanned = _spanned(options)
+    if not spanned:
+        return (suite_of(options),), {}
+    found, left = [], {}
+    for world in spanned:
+        try:
+            found.append(suite_of(replace(options, world=world)))
+        except UserError as exc:  # a world none of whose tasks is laid out: each of its tasks, why
+            name = options.suite or worlds.world(world).suite
+            left |= {task: f"world {world}: {exc}" for task in libero.tasks(name) if worlds.world(world).stands(task)}
+    if not found:
+        raise UserError(f"no world of {options.suite or options.world} lays out its tasks: {next(iter(left.values()))}")
+    return tuple(found), left
+
+
+def _options(options: CanonicalOptions) -> tuple[tuple[Suite, ...], dict[str, str], Path]:
+    suites, left = suites_of(options)
     if options.tasks is not None:
         if options.tasks < 1:
             raise UserError(f"tasks must be at least 1, got {options.tasks}")
-        suite = replace(suite, tasks=suite.tasks[: options.tasks])
+        kept, room = [], options.tasks
+        for suite in suites:
+            if room > 0:
+                kept.append(replace(suite, tasks=suite.tasks[:room]))
+                room -= len(kept[-1].tasks)
+        suites = tuple(kept)
     check_seed(options.seed)
-    fewest = min(len(libero.initial_states(suite.name, t)) for t in suite.tasks)
+    fewest = min(len(libero.initial_states(suite.name, t)) for suite in suites for t in suite.tasks)
     if not 1 <= options.states <= fewest:
-        raise UserError(f"states must be between 1 and {fewest} ({suite.name}'s initial states per task), got {options.states}")
+        raise UserError(
+            f"states must be between 1 and {fewest} ({suites[0].name}'s initial states per task), got {options.states}"
+        )
     if not 16 <= options.image_size <= worlds.MAX_IMAGE_SIZE or options.image_size % 2:
         raise UserError(f"image_size must be an even number of pixels in [16, {worlds.MAX_IMAGE_SIZE}], got {options.image_size}")
     if options.look not in LOOKS:
         raise UserError(f"look must be one of {', '.join(LOOKS)}, got {options.look!r}")
     if options.switches < 0:
         raise UserError(f"switches must be 0 or more, got {options.switches}")
-    out = Path(options.out or f"datasets/{suite.name}-canonical")
+    out = Path(options.out or f"datasets/{suites[0].name}-canonical")
     check_output(out, options.overwrite)
-    return suite, out
+    return suites, left, out
 
 
 def trial_spec(suite: Suite, task: str, index: int, seed: int, setup: Setup) -> EpisodeSpec:
@@ -312,7 +362,7 @@ def covered(referent: Referent, world: worlds.World) -> list[str]:
 
 
 def build(options: CanonicalOptions) -> None:
-    suite, out = _options(options)
+    suites, left_worlds, out = _options(options)
     from tqdm import tqdm
 
     from gen.products.exam import first_frame, switch_rows
@@ -321,43 +371,49 @@ def build(options: CanonicalOptions) -> None:
     from oracle.scene import scene_for
 
     started = time.perf_counter()
-    world = suite.world
-    profile = profiles.named(world.profiles[0])
-    setup = Setup(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
     rng = np.random.default_rng(options.seed)
     chosen = {
         task: sorted(rng.choice(len(libero.initial_states(suite.name, task)), options.states, replace=False).tolist())
+        for suite in suites
         for task in suite.tasks
     }
-    scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
-    ik = ArmIK(np.asarray(world.robot_home), world.name)
-    cameras = Cameras(scene, setup.image_size, setup.cameras)
-    rows, specs, without = [], [], {}
-    bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suite.name} initial states", unit="state")
-    for task in suite.tasks:
-        for s in chosen[task]:
-            spec = load_state(scene, suite, task, s, setup, len(specs), options.seed)
-            values = {a.id: a.value for a in suite.referent.alternatives(spec)}
-            ee = [float(v) for v in scene.ee_pos()]
-            state = scene.physics_state().astype(np.float64).tolist()
-            settled = scene.settled(spec)
-            seen = first_frame(cameras, spec)
-            switched, why = switch_rows(scene, ik, suite.referent, spec, state, len(specs), options.switches)
-            if why:
-                without[str(len(specs))] = why
-            rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, settled, switched, seen)
-            specs.append(spec)
-            bar.update()
+    rows, specs, without, reports, setups = [], [], {}, {}, {}
+    bar = tqdm(total=sum(map(len, chosen.values())), desc=f"{suites[0].name} initial states", unit="state")
+    for suite in suites:  # a scene, its renderer and its IK per world
+        world = suite.world
+        profile = profiles.named(world.profiles[0])
+        setup = Setup(options.image_size, 20, profile.camera_names, world.robot_home, profile.name, world.name, options.look)
+        scene = scene_for(suite.inventory(), profile.name, world.name, options.look)
+        ik = ArmIK(np.asarray(world.robot_home), world.name)
+        cameras = Cameras(scene, setup.image_size, setup.cameras)
+        first = len(specs)
+        for task in suite.tasks:
+            for s in chosen[task]:
+                spec = load_state(scene, suite, task, s, setup, len(specs), options.seed)
+                values = {a.id: a.value for a in suite.referent.alternatives(spec)}
+                ee = [float(v) for v in scene.ee_pos()]
+                state = scene.physics_state().astype(np.float64).tolist()
+                settled = scene.settled(spec)
+                seen = first_frame(cameras, spec)
+                switched, why = switch_rows(scene, ik, suite.referent, spec, state, len(specs), options.switches)
+                if why:
+                    without[str(len(specs))] = why
+                rows += exam.trial_rows(len(specs), spec, values, state, world.episode_steps, ee, settled, switched, seen)
+                specs.append(spec)
+                bar.update()
+        cameras.close()
+        reports[world.name] = audit(suite.referent, specs[first:])
+        setups[world.name] = setup
     bar.close()
-    cameras.close()
-    report = audit(suite.referent, specs)
     with staging(out) as root:
         root.mkdir(parents=True)
-        header = _header(options, suite, profile.name, setup, chosen, report)
+        header = _header(options, suites, setups, chosen, reports, left_worlds)
         exam.write(root, rows, {**header, **({exam.NO_SWITCH: without} if without else {})})
-    left = f"; left out: {len(suite.left_out)} task(s) (exam.json says why)" if suite.left_out else ""
+    covered = sum(len(suite.tasks) for suite in suites)
+    omitted = len(left_worlds) + sum(len(suite.left_out) for suite in suites)
+    left = f"; left out: {omitted} task(s) (exam.json says why)" if omitted else ""
     print(
-        f"wrote an exam of {len(specs)} LIBERO initial states ({len(suite.tasks)} tasks x {options.states}) of {suite.name} "
+        f"wrote an exam of {len(specs)} LIBERO initial states ({covered} tasks x {options.states}) of {suites[0].name} "
         f"to {out} in {time.perf_counter() - started:.1f} s{left}\n{take_hint(out)}"
     )
 
@@ -386,25 +442,36 @@ def _posed(spec: EpisodeSpec, state: np.ndarray, problem: libero.Problem, world:
     return replace(spec, objects=(*objects, *spec.objects[len(objects) :]), counterfactuals=swaps)  # places on furniture stay
 
 
-def _header(options: CanonicalOptions, suite: Suite, profile: str, setup: Setup, chosen: dict, report: dict) -> dict:
-    features, world, referent = profiles.named(profile), suite.world, suite.referent
-    named = f"suite={suite.name}" if suite.name != world.suite else f"world={world.name}"
+def _header(options: CanonicalOptions, suites: tuple[Suite, ...], setups: dict[str, Setup], chosen: dict, reports: dict,
+            left_worlds: dict[str, str]) -> dict:  # fmt: skip
+    """exam.json's fields. An exam of a suite spanning several worlds (LIBERO-10's) lists them under
+    `worlds` (each trial's spec names its own), and its referent's spec and audit per world."""
+    first = suites[0]
+    setup, referent = setups[first.world.name], first.referent
+    features = profiles.named(setup.profile)
+    several = len(suites) > 1 or bool(left_worlds)
+    if several:
+        named = f"suite={first.name}" if first.name != first.world.suite else f"world={first.world.suite}"
+    else:
+        named = f"suite={first.name}" if first.name != first.world.suite else f"world={first.world.name}"
     tasks = {}
-    for task in suite.tasks:
-        problem, base = suite.problem(task), libero.base_task(suite.name, task)
-        delivered = suite.instruction(task, libero.language(base))
-        design = referent.code.canonical(referent.config, problem)
-        assert design is not None  # a covered task
-        tasks[task] = {
-            "bddl": f"bddl_files/{suite.name}/{task}.bddl",
-            "language_line": problem.language,
-            "file_name_instruction": libero.language(task),
-            "instruction": delivered,
-            "base_task": base,
-        }
-        left = suite.swaps(task, design, delivered)[1]
-        if left:
-            tasks[task]["left_out_swaps"] = left
+    for suite in suites:
+        for task in suite.tasks:
+            problem, base = suite.problem(task), libero.base_task(suite.name, task)
+            delivered = suite.instruction(task, libero.language(base))
+            design = suite.referent.code.canonical(suite.referent.config, problem)
+            assert design is not None  # a covered task
+            tasks[task] = {
+                "bddl": f"bddl_files/{suite.name}/{task}.bddl",
+                "language_line": problem.language,
+                "file_name_instruction": libero.language(task),
+                "instruction": delivered,
+                "base_task": base,
+            }
+            left = suite.swaps(task, design, delivered)[1]
+            if left:
+                tasks[task]["left_out_swaps"] = left
+    where = {"worlds": [s.world.name for s in suites]} if several else {"world": first.world.name}
     return {
         "referent": referent.name,
         "seed": options.seed,
@@ -412,15 +479,15 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, setup: Setup,
         "command": f"python -m gen.canonical {named} states={options.states} seed={options.seed} image_size={options.image_size}"
         + (f" tasks={options.tasks}" if options.tasks else "")
         + (f" switches={options.switches}" if options.switches != 1 else ""),
-        "profile": profile,
-        "world": world.name,
+        "profile": setup.profile,
+        **where,
         "canonical": {
-            "suite": suite.name,
-            "base_suite": world.suite,
+            "suite": first.name,
+            "base_suite": first.world.suite,
             "states": {task: states for task, states in chosen.items()},
             "tasks": tasks,
-            "left_out": suite.left_out,
-            "episode_steps": world.episode_steps,
+            "left_out": {task: why for suite in suites for task, why in suite.left_out.items()} | left_worlds,
+            "episode_steps": max(s.world.episode_steps for s in suites),
             "settle_steps": features.settle_steps,
         },
         "observation": {
@@ -435,6 +502,9 @@ def _header(options: CanonicalOptions, suite: Suite, profile: str, setup: Setup,
             "mirrored": features.mirrored,
             "settle_steps": features.settle_steps,
         },
-        "referent_spec": asdict(referent.config),
-        "audit": report,
+        **(
+            {"referent_spec": {s.world.name: asdict(s.referent.config) for s in suites}, "audit": reports}
+            if several
+            else {"referent_spec": asdict(referent.config), "audit": reports[first.world.name]}
+        ),
     }

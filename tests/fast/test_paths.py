@@ -20,7 +20,6 @@ NOT_OURS = {
     "scripts/serve_policy.py": "openpi's, run in its checkout (docs/GPU_RECIPE.md)",
     "tests/libero/test_libero_": "a pattern, test_libero_<name>.py (docs/ARCHITECTURE.md's checklists)",
     "core/worlds/libero_10_": "what LIBERO-10 will add (docs/ARCHITECTURE.md's checklists)",
-    "referents/in_worlds/libero_10/libero_10.yaml": "what LIBERO-10 will add (docs/ARCHITECTURE.md's checklists)",
     "tests/libero/test_libero_10.py": "what LIBERO-10 will add (docs/ARCHITECTURE.md's checklists)",
 }
 TEXT = (".py", ".md", ".yaml", ".toml", ".txt")

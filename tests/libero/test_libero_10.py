@@ -6,6 +6,8 @@ each reset), and the same pictures at LIBERO-10's own initial states."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from collections import Counter
 from dataclasses import replace
 from pathlib import Path
@@ -357,14 +359,17 @@ def test_put_both_episodes_replay_in_liberos_own_living_room(tmp_path: Path) -> 
 
 def test_the_living_rooms_canonical_exam_holds_its_put_both_tasks(shared: Shared) -> None:
     """`gen.canonical world=libero_10_living_room`: the three "put both" tasks on LIBERO's own states,
-    a swap from each other grocery renaming the first name or the second in turn (the other kept), and
-    the two tasks of mugs and plates left out with why."""
+    a swap from each other grocery renaming the first name or the second in turn (the other kept); the
+    mugs onto the plates and the pudding right of the plate as LIBERO sets them, with no swap (the red
+    mug beside them is too wide to take)."""
     exam = read(shared.canonical(LIVING_ROOM))
     canonical = exam.meta["canonical"]
-    assert [t[:18] for t in canonical["tasks"]] == ["LIVING_ROOM_SCENE2", "LIVING_ROOM_SCENE2", "LIVING_ROOM_SCENE1"]
-    assert sorted(t[:18] for t in canonical["left_out"]) == ["LIVING_ROOM_SCENE5", "LIVING_ROOM_SCENE6"]
-    assert all("lays out no swap" in why for why in canonical["left_out"].values())
-    first = exam.trials[exam.trials["trial"] == 2]  # LIVING_ROOM_SCENE1: alphabet soup and cream cheese box
+    assert [t[:18] for t in canonical["tasks"]] == ["LIVING_ROOM_SCENE2", "LIVING_ROOM_SCENE2", "LIVING_ROOM_SCENE5",
+                                                    "LIVING_ROOM_SCENE6", "LIVING_ROOM_SCENE1"]  # fmt: skip
+    assert not canonical["left_out"]
+    mugs = exam.trials[exam.trials["trial"].isin([2, 3])]
+    assert "swap" not in set(mugs["face"]) and list(mugs["face"]).count("task") == 2
+    first = exam.trials[exam.trials["trial"] == 4]  # LIVING_ROOM_SCENE1: alphabet soup and cream cheese box
     swaps = sorted(first[first["face"] == "swap"]["instruction"])
     assert swaps == ["put both the alphabet soup and the ketchup in the basket",
                      "put both the tomato sauce and the cream cheese box in the basket"]  # fmt: skip
@@ -373,14 +378,56 @@ def test_the_living_rooms_canonical_exam_holds_its_put_both_tasks(shared: Shared
 
 @pytest.mark.reference
 def test_the_oracle_does_the_living_rooms_canonical_exam_and_the_remembered_layout_reads_no_name(shared: Shared) -> None:
-    """On LIBERO's own first states of the three "put both" tasks the oracle does every task and most
-    swaps (12 of 12 since a basket is entered, not dropped into; 10 before), at least the 90% asked; the remembered layout
-    (`position`: a scene's groceries say which task, the first by name where two share one) does the
+    """On LIBERO's own first states of the living room's five tasks (three "put both", the mugs onto
+    the plates, the mug and the pudding) the oracle does the tasks and most swaps (12 of 12 since a basket is entered, not
+    dropped into; 10 before), at least the 90% asked; the remembered layout (`position`: a scene's
+    groceries say which task, the first by name where two share one) does the
     tasks whose scene it knows and no swap; `nothing` does nothing. A swap is read at its `achieved`
     level (the whole renamed ask done): the hand lands on the kept name's grocery whichever it read."""
-    reports = canonical_reports(shared, {"oracle": 3, "position": 3, "nothing": 1}, LIVING_ROOM)
+    reports = canonical_reports(shared, {"oracle": 5, "position": 5, "nothing": 1}, LIVING_ROOM)
     faces = {policy: report["faces"] for policy, report in reports.items()}
-    assert faces["oracle"]["task"]["k"] == 3 and faces["oracle"]["obeyed_name"]["rate"] >= 0.9, faces["oracle"]
-    assert faces["position"]["task"]["k"] == 2 and faces["position"]["obeyed_name"]["k"] == 0, faces["position"]
+    assert faces["oracle"]["task"]["k"] >= 4 and faces["oracle"]["obeyed_name"]["rate"] >= 0.9, faces["oracle"]
+    assert faces["position"]["task"]["k"] >= 3 and faces["position"]["obeyed_name"]["k"] == 0, faces["position"]
     assert all(f["k"] == 0 for f in faces["nothing"].values())
-    assert reports["oracle"]["partial"]["done"] == {"1+2": 3}
+    assert reports["oracle"]["partial"]["done"].get("1+2", 0) >= 4, reports["oracle"]["partial"]
+
+
+def test_libero_10s_canonical_exam_spans_the_worlds_of_its_scenes(shared: Shared) -> None:
+    """`gen.canonical world=libero_10`: one exam of LIBERO-10's tasks across the worlds its scenes stand
+    in, each trial's spec naming its own (exam.json lists them under `worlds`, the audit per world):
+    the kitchens' and the mugs' tasks as LIBERO sets them, with no swap; the one task no world lays out
+    yet (the book into the caddy's back compartment) left out with why."""
+    exam = read(shared.canonical(SUITE))
+    canonical = exam.meta["canonical"]
+    assert len(canonical["tasks"]) == 9, list(canonical["tasks"])
+    assert [t[:18] for t in canonical["left_out"]] == ["STUDY_SCENE1_pick_"]
+    stood = {EpisodeSpec.from_json(s).setup.world for s in exam.trials["spec"]}
+    assert stood == set(exam.meta["worlds"]) == set(SCENES) - {"libero_10_study"} == set(exam.meta["audit"])
+    assert "world" not in exam.meta
+    kitchens = exam.trials[exam.trials["spec"].map(lambda s: "kitchen" in EpisodeSpec.from_json(s).setup.world)]
+    assert len(kitchens) and "swap" not in set(kitchens["face"])
+
+
+def test_the_oracle_does_the_kitchens_tasks_of_libero_10s_canonical_exam(shared: Shared) -> None:
+    """Its first four trials are the kitchens' (the stove on and the pot on it, the bowl in the drawer
+    and the drawer shut, the mug in the microwave and its door shut, both pots on the stove), from
+    LIBERO's own first states, each judged goal by goal: the oracle does all four; a drawer or door the
+    state leaves open is recorded where it stands shut, and the log's first step is still its start."""
+    report = canonical_reports(shared, {"oracle": 4}, SUITE)["oracle"]
+    assert report["faces"]["task"]["k"] == 4, report["faces"]["task"]
+
+
+@pytest.mark.parametrize(
+    ("command", "argv", "needle"),
+    [
+        ("gen.canonical", ["world=libero_10_kitchen_scene9"], "unknown world 'libero_10_kitchen_scene9'"),
+        ("gen", ["referent=libero_10", "world=libero_10_kitchen_scene3", "n=1"], "lays out only LIBERO's own tasks in world"),
+        ("gen.canonical", ["world=libero_10_study"], "world libero_10_study has no referent type that lays out"),
+    ],
+)
+def test_libero_10s_bad_input_is_refused_in_one_line(command: str, argv: list[str], needle: str, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", command, *argv, f"out={out}"], capture_output=True, text=True)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
+    assert not out.exists()
