@@ -31,7 +31,7 @@ from referents.schema import ReferentSpecError
 SPLITS = {"train": (), "exam": (0xE7A3,)}
 
 
-PROGRESS_FROM = 10_000  # plans of this many episodes or more show a progress bar while they are drawn
+PROGRESS_FROM = 2_000  # plans of this many episodes or more (about 2 s) show a progress bar while they are drawn
 
 
 def designs(referent: Referent, n: int, seed: int, split: str = "train", stream: str | None = None) -> list[Design]:
