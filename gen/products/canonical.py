@@ -409,11 +409,11 @@ def build(options: CanonicalOptions) -> None:
         root.mkdir(parents=True)
         header = _header(options, suites, setups, chosen, reports, left_worlds)
         exam.write(root, rows, {**header, **({exam.NO_SWITCH: without} if without else {})})
-    covered = sum(len(suite.tasks) for suite in suites)
+    laid_out = sum(len(suite.tasks) for suite in suites)
     omitted = len(left_worlds) + sum(len(suite.left_out) for suite in suites)
     left = f"; left out: {omitted} task(s) (exam.json says why)" if omitted else ""
     print(
-        f"wrote an exam of {len(specs)} LIBERO initial states ({covered} tasks x {options.states}) of {suites[0].name} "
+        f"wrote an exam of {len(specs)} LIBERO initial states ({laid_out} tasks x {options.states}) of {suites[0].name} "
         f"to {out} in {time.perf_counter() - started:.1f} s{left}\n{take_hint(out)}"
     )
 
