@@ -70,7 +70,6 @@ def validate(cfg: ReferentConfig) -> None:
     if _tasks_only(cfg):
         return
     baskets = cfg.role(_DESTINATION)
-    world = worlds.world(cfg.world)
     if len(baskets) != 1 or world.kind(baskets[0].kind).contain is None:
         raise cfg.fail("objects", f"needs one object with role: destination, a container of world {cfg.world}")
     if world.kind(baskets[0].kind).side_by_side is None:
@@ -161,10 +160,7 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
     if not _puts_both(cfg, problem, goals):
         return _own_task(cfg, problem, goals)
     named = {c.kind for c in _groceries(cfg)}
-    placements = []
-    for instance, kind in problem.objects.items():
-        slot = scenery.nearest_slot(cfg, problem, instance, _table_slots(cfg))
-        placements.append(Placement(instance, scenery.candidate(cfg, kind), slot))
+    placements = _as_libero_sets(cfg, problem)
     ids = [g.target for g in goals]
     words = [scenery.candidate(cfg, problem.objects[i]).name for i in ids]
     instruction = libero.language(problem.name)
@@ -174,6 +170,15 @@ def canonical(cfg: ReferentConfig, problem: libero.Problem) -> Design | None:
         for k, p in enumerate(others)
     )
     return Design(tuple(placements), goals[0].target, cfg.templates[0], instruction, swaps, libero_goals.task(goals))
+
+
+def _as_libero_sets(cfg: ReferentConfig, problem: libero.Problem) -> list[Placement]:
+    """A LIBERO problem's objects under its names, each in the table slot nearest its region (where it
+    stands until LIBERO's state poses it)."""
+    among = _table_slots(cfg)
+    return [
+        Placement(i, scenery.candidate(cfg, k), scenery.nearest_slot(cfg, problem, i, among)) for i, k in problem.objects.items()
+    ]
 
 
 def _puts_both(cfg: ReferentConfig, problem: libero.Problem, goals: tuple[Goal, ...]) -> bool:
@@ -195,10 +200,7 @@ def _own_task(cfg: ReferentConfig, problem: libero.Problem, goals: tuple[Goal, .
     sites = _sites(cfg)
     if any(g.target not in problem.objects and g.target not in sites for g in goals):
         return None
-    among = _table_slots(cfg)
-    placements = [
-        Placement(i, scenery.candidate(cfg, k), scenery.nearest_slot(cfg, problem, i, among)) for i, k in problem.objects.items()
-    ]
+    placements = _as_libero_sets(cfg, problem)
     named = dict.fromkeys(g.target for g in goals if g.target not in problem.objects)
     placements += [Placement(place, scenery.candidate(cfg, place), sites[place]) for place in named]
     return Design(

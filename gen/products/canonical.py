@@ -449,11 +449,12 @@ def _header(options: CanonicalOptions, suites: tuple[Suite, ...], setups: dict[s
     first = suites[0]
     setup, referent = setups[first.world.name], first.referent
     features = profiles.named(setup.profile)
-    several = len(suites) > 1 or bool(left_worlds)
-    if several:
-        named = f"suite={first.name}" if first.name != first.world.suite else f"world={first.world.suite}"
-    else:
-        named = f"suite={first.name}" if first.name != first.world.suite else f"world={first.world.name}"
+    several = bool(_spanned(options))
+    world = first.world.suite if several else first.world.name
+    if first.name == first.world.suite:
+        named = f"world={world}"
+    else:  # a LIBERO-PRO suite: and the one world taken, where its base suite's tasks span several
+        named = f"suite={first.name}" + ("" if several or len(_base_suites()[first.world.suite]) == 1 else f" world={world}")
     tasks = {}
     for suite in suites:
         for task in suite.tasks:

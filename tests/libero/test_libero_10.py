@@ -403,7 +403,7 @@ def test_libero_10s_canonical_exam_spans_the_worlds_of_its_scenes(shared: Shared
     assert [t[:18] for t in canonical["left_out"]] == ["STUDY_SCENE1_pick_"]
     stood = {EpisodeSpec.from_json(s).setup.world for s in exam.trials["spec"]}
     assert stood == set(exam.meta["worlds"]) == set(SCENES) - {"libero_10_study"} == set(exam.meta["audit"])
-    assert "world" not in exam.meta
+    assert "world" not in exam.meta and exam.meta["command"].startswith("python -m gen.canonical world=libero_10 states=1")
     kitchens = exam.trials[exam.trials["spec"].map(lambda s: "kitchen" in EpisodeSpec.from_json(s).setup.world)]
     assert len(kitchens) and "swap" not in set(kitchens["face"])
 
