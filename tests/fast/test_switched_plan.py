@@ -33,6 +33,18 @@ def test_the_share_switches_and_every_alternative_is_as_often_the_second_target(
     assert all(kept) and "switch" not in unswitched.specs[0].to_json()
 
 
+def test_a_training_switch_comes_anywhere_along_the_approach(tmp_path: Path) -> None:
+    """oracle/episode.py `along`: a step in [1, the exam's switch step], drawn from the episode's
+    seed and index alone: the same plan switches at the same steps, and they spread over the way."""
+    from oracle.episode import along
+
+    planned = plan_and_audit(parse([f"out={tmp_path / 'plan'}", "n=120", "switched=0.25", "plan_only=true"]))
+    switched = [spec for spec in planned.specs if spec.switch is not None]
+    steps = [along(spec, 24) for spec in switched]
+    assert all(1 <= step <= 24 for step in steps) and len(set(steps)) >= 12, steps
+    assert steps == [along(spec, 24) for spec in switched] and along(switched[0], 1) == 1
+
+
 def test_a_plan_records_where_it_will_switch(tmp_path: Path) -> None:
     out = tmp_path / "plan"
     generate(parse([f"out={out}", "n=10", "switched=0.3", "plan_only=true"]), progress=False)
