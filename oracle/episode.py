@@ -109,6 +109,7 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
 
 MOVED = 0.01  # m: how far the thing a program acts on must move before the hand counts as holding it
 CARRIED = 0.05  # m: how high a carried object has risen when a switch that only changes where it goes comes
+LATEST = 0.02  # m from where the hand takes hold of a thing: the latest a training switch comes (coming down, not yet closing)
 
 
 def change_course(
@@ -122,8 +123,8 @@ def change_course(
     carries it on to the new place. Otherwise, or where the oracle cannot carry it on (a bottle
     held across, asked onto a sloping rack), where the hand first comes within the exam's
     SWITCH_DISTANCE of what it takes hold of (`approach_step`, where an exam's switch rows change
-    it), or at a step before it drawn from the spec's seed and index (`along`; at the exam's where
-    the oracle cannot finish from the drawn one). An object taken is never put back: a switch to
+    it): at a step drawn from the spec's seed and index up to where the hand is LATEST from it
+    (`along`; at the exam's where the oracle cannot finish from the drawn one). An object taken is never put back: a switch to
     another object comes before the grasp."""
     first = demonstrate(scene, ik, replace(spec, switch=None), script, state, settle)
     if not first.success:
@@ -141,20 +142,21 @@ def change_course(
     if not step:
         why = "the hand starts there" if step == 0 else "what it acts on never moves"
         return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
-    for at in dict.fromkeys((along(spec, step), step)):  # the drawn step, else the exam's
+    latest = max(step, approach_step(scene, first, LATEST) or step)
+    for at in dict.fromkeys((along(spec, latest), step)):  # the drawn step, else the exam's
         demo = _joined(first, at, demonstrate(scene, ik, then, script, state, settle, first.actions[:at]))
         if demo.success:
             break
     return replace(demo, spec=spec)
 
 
-def along(spec: EpisodeSpec, approach: int) -> int:
-    """Where on its approach a training episode changes course: a step in [1, `approach`] (the
-    exam's switch point) drawn from the spec's seed and index. A learned policy lags the oracle, so
-    at the exam's switch step its hand is still on the way, where a set switched only at the
-    oracle's point never shows it a second instruction (issue 52's first course run: switches
-    obeyed 0/19, its hand 15-22 cm from the object, farther than the oracle's 10 cm)."""
-    return int(np.random.default_rng([spec.seed, spec.index, ALONG]).integers(1, approach + 1))
+def along(spec: EpisodeSpec, latest: int) -> int:
+    """Where on its approach a training episode changes course: a step in [1, `latest`] (the hand
+    LATEST from where it takes hold) drawn from the spec's seed and index. At an exam's switch step a
+    learned policy's hand is anywhere on its way, not where the oracle's is: the first course run's
+    was already over the object and coming down (1.4 cm off across), where a set switched only at
+    the oracle's 10 cm never showed it a second instruction, and it went on down (0/19 obeyed)."""
+    return int(np.random.default_rng([spec.seed, spec.index, ALONG]).integers(1, latest + 1))
 
 
 def _joined(first: Demo, step: int, then: Demo) -> Demo:

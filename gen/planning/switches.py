@@ -6,11 +6,10 @@ the counterfactual whose object, slot and program have so far been the second ta
 (ties drawn), so every alternative is as often the second target as any other, as the roles
 balance the first. Which episodes switch depends on nothing in them, and where one switches is
 the oracle's (oracle/episode.py `change_course`: on the approach, at a step drawn from the
-episode's seed and index up to where the hand first comes within the exam's SWITCH_DISTANCE of
-what it takes hold of, or, when the new ask brings the held object elsewhere, once it is
-carried), so the step says at most whether the new ask keeps the object, which its words say
-too, never which target. The plan audits the second targets as it audits the first
-(gen/planning/plan.py).
+episode's seed and index up to where the hand is 2 cm from what it takes hold of, or, when the
+new ask brings the held object elsewhere, once it is carried), so the step says at most whether
+the new ask keeps the object, which its words say too, never which target. The plan audits the
+second targets as it audits the first (gen/planning/plan.py).
 """
 
 from __future__ import annotations
