@@ -23,8 +23,6 @@ from oracle.ik import ArmIK, IKError
 from oracle.scene import Scene
 from oracle.skills import Skills
 
-ALONG = 0xA10  # the random stream of where on its approach a training episode changes course (`along`)
-
 
 @dataclass
 class Demo:
@@ -110,6 +108,7 @@ def replay(scene: Scene, spec: EpisodeSpec, actions: np.ndarray, observe: Callab
 MOVED = 0.01  # m: how far the thing a program acts on must move before the hand counts as holding it
 CARRIED = 0.05  # m: how high a carried object has risen when a switch that only changes where it goes comes
 LATEST = 0.02  # m from where the hand takes hold of a thing: the latest a training switch comes (coming down, not yet closing)
+ALONG = 0xA10  # the random stream of where on its approach a training episode changes course (`along`)
 
 
 def change_course(
@@ -124,8 +123,8 @@ def change_course(
     held across, asked onto a sloping rack), where the hand first comes within the exam's
     SWITCH_DISTANCE of what it takes hold of (`approach_step`, where an exam's switch rows change
     it): at a step drawn from the spec's seed and index up to where the hand is LATEST from it
-    (`along`; at the exam's where the oracle cannot finish from the drawn one). An object taken is never put back: a switch to
-    another object comes before the grasp."""
+    (`along`; at the exam's where the oracle cannot finish from the drawn one). An object taken is
+    never put back: a switch to another object comes before the grasp."""
     first = demonstrate(scene, ik, replace(spec, switch=None), script, state, settle)
     if not first.success:
         return replace(first, spec=spec, failure=f"before its switch: {first.failure}")
@@ -153,9 +152,10 @@ def change_course(
 def along(spec: EpisodeSpec, latest: int) -> int:
     """Where on its approach a training episode changes course: a step in [1, `latest`] (the hand
     LATEST from where it takes hold) drawn from the spec's seed and index. At an exam's switch step a
-    learned policy's hand is anywhere on its way, not where the oracle's is: the first course run's
-    was already over the object and coming down (1.4 cm off across), where a set switched only at
-    the oracle's 10 cm never showed it a second instruction, and it went on down (0/19 obeyed)."""
+    learned policy's hand is anywhere on its way, not where the oracle's is: a course run's
+    checkpoint trained on switches up to the oracle's 10 cm was already over the grocery and coming
+    down there (1.4 cm off across), where no training switch had shown it a second instruction,
+    and went on down (0/19 obeyed)."""
     return int(np.random.default_rng([spec.seed, spec.index, ALONG]).integers(1, latest + 1))
 
 

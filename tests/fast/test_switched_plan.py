@@ -34,8 +34,8 @@ def test_the_share_switches_and_every_alternative_is_as_often_the_second_target(
 
 
 def test_a_training_switch_comes_anywhere_along_the_approach(tmp_path: Path) -> None:
-    """oracle/episode.py `along`: a step in [1, the exam's switch step], drawn from the episode's
-    seed and index alone: the same plan switches at the same steps, and they spread over the way."""
+    """oracle/episode.py `along`: a step in [1, the hand 2 cm from what it takes hold of], drawn from
+    the episode's seed and index alone: the same plan switches at the same steps, spread over the way."""
     from oracle.episode import along
 
     planned = plan_and_audit(parse([f"out={tmp_path / 'plan'}", "n=120", "switched=0.25", "plan_only=true"]))
