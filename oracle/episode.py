@@ -137,11 +137,12 @@ def change_course(
             demo = _joined(first, carried, demonstrate(scene, ik, then, script, state, settle, first.actions[:carried], held))
             if demo.success:
                 return replace(demo, spec=spec)
-    step = approach_step(scene, first, SWITCH_DISTANCE)
+    to_hold = _to_hold(scene, first)
+    step = _first_within(to_hold, SWITCH_DISTANCE)
     if not step:
         why = "the hand starts there" if step == 0 else "what it acts on never moves"
         return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
-    latest = max(step, approach_step(scene, first, LATEST) or step)
+    latest = max(step, _first_within(to_hold, LATEST) or step)
     for at in dict.fromkeys((along(spec, latest), step)):  # the drawn step, else the exam's
         demo = _joined(first, at, demonstrate(scene, ik, then, script, state, settle, first.actions[:at]))
         if demo.success:
@@ -192,6 +193,13 @@ def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
     skill (a grasp, a push, a pull on a handle, a turn). There the approach has committed, and a new
     instruction still means a course to change: nothing is held yet. None if the thing never moves
     or the hand never comes so near before it does."""
+    return _first_within(_to_hold(scene, demo), within)
+
+
+def _to_hold(scene: Scene, demo: Demo) -> np.ndarray | None:
+    """The hand's distance, at the start of each action of `demo` before it, from where it takes
+    hold of what it acts on first (`approach_step`): one replay of its states for every distance
+    asked of it. None if that thing never moves."""
     spec = demo.spec
     first = programs.named(spec.task.program).moved(spec, spec.target)
     path = []
@@ -203,4 +211,9 @@ def approach_step(scene: Scene, demo: Demo, within: float) -> int | None:
     if moved is None:
         return None
     hold = path[moved][0]
-    return next((t for t, (ee, _) in enumerate(path[:moved]) if np.linalg.norm(ee - hold) < within), None)
+    return np.array([np.linalg.norm(ee - hold) for ee, _ in path[:moved]])
+
+
+def _first_within(to_hold: np.ndarray | None, within: float) -> int | None:
+    """The first action at whose start the hand is within `within` of where it takes hold."""
+    return None if to_hold is None else next((t for t, d in enumerate(to_hold) if d < within), None)
