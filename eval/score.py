@@ -24,8 +24,9 @@ report.json schema (version 2):
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
       (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
       (swap: achieved the new ask), and on exams with switch rows switch_obeyed (the instruction
-      changed mid-course: landed on the newly named alternative) and switch_blind (went on to the
-      original). `ci` is Wilson's (every rollout independent); `ci_trials` resamples whole trials,
+      changed mid-course: landed on the newly named alternative, its closest approach counted from
+      the switch step) and switch_blind (went on to the original, counted likewise). `ci` is
+      Wilson's (every rollout independent); `ci_trials` resamples whole trials,
       whose rollouts share a scene (core/rates.py). `by_level` =
       {"5cm", "2cm", "achieved": {k, n, rate, ci, ci_trials}}: the same face judged as landing
       within 5 cm, within 2 cm, or achieving the program (lifted / pushed / placed) on what the

@@ -16,7 +16,16 @@ import pandas as pd
 
 from core import contact, programs, worlds
 from core.catalog import Kind
-from core.exam import FRAME_OBJECTS, LANDING, PREDICTION_RADIUS, REACH_THRESHOLDS, Exam, decode_objects, goal_of
+from core.exam import (
+    FRAME_OBJECTS,
+    LANDING,
+    PREDICTION_RADIUS,
+    REACH_THRESHOLDS,
+    SWITCH,
+    Exam,
+    decode_objects,
+    goal_of,
+)
 from core.products import EXAM_PATH
 from core.programs import achieved
 from core.rates import Rate, against_chance, cluster_ci
@@ -52,19 +61,27 @@ def judge(
 ) -> dict:
     """What one rollout did to each thing it could have done, judged up to `steps` (default: all
     of it): the row's alternatives and every other object the hand can land on (`landable`).
-    `turns`: the movable containers' orientations, where logged (a turned basket's box turns)."""
+    `turns`: the movable containers' orientations, where logged (a turned basket's box turns).
+    A switch row's landings count from its switch step: where the hand went before the new name
+    was given is no landing on it."""
     spec = EpisodeSpec.from_json(row["spec"])
     end = len(ee) - 1 if steps is None else steps
     outcome = logged_outcome(ee, objects, end, turns)
     listed = json.loads(row["alternatives"])
     alternatives = [(a["target"], a["program"]) for a in listed]
+    window = slice(min(_switch_step(row), end), end + 1)
     result = {}
     for alt in alternatives + landable(spec, alternatives):
         goal = goal_of(listed, *alt)
         aimed = spec.asking(*alt, goal).goals()[goal]  # a task of more goals: the renamed goal's motion is the landing
-        distances = contact_distance(aimed, {k: v[: end + 1] for k, v in objects.items()}, *alt, ee[: end + 1])
+        distances = contact_distance(aimed, {k: v[window] for k, v in objects.items()}, *alt, ee[window])
         result[alt] = {"achieved": achieved(spec, outcome, *alt, goal), "distance": float(np.min(distances))}
     return result
+
+
+def _switch_step(row: pd.Series) -> int:
+    """A switch row's switch step (the first step the new instruction is shown), else 0."""
+    return int(json.loads(row.get(SWITCH) or "{}").get("step", 0))
 
 
 def logged_outcome(

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 
 from core import contact, worlds
-from core.exam import Exam, trial_rows
+from core.exam import Exam, Switch, trial_rows
 from core.spec import EpisodeSpec
 from eval.scoring.score import score
 from gen.planning.plan import default_setup, plan
@@ -82,3 +82,26 @@ def test_a_landing_on_the_object_no_swap_names_is_a_distractors(world: str) -> N
     assert report["faces"]["obeyed_name"]["k"] == 0 and report["faces"]["true_target"]["k"] == 0
     assert report["reach_probe"]["obeyed_name"]["went_distractor"] == len(asked)
     assert report["faces"]["obeyed_name"]["chance"] == pytest.approx(0.25)
+
+
+def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
+    """A hand over the newly named object before the switch has not obeyed a name it was not yet
+    given: a switch row is judged from its switch step (where it went before that counts for
+    nothing), so passing over it and leaving is no landing, and staying there is one."""
+    referent = registry.load("object", world="native")
+    spec = plan(referent, 1, seed=0, setup=default_setup(referent), split="exam")[0]
+    values = {a.id: a.value for a in referent.alternatives(spec)}
+    rows = trial_rows(0, spec, values, [], 10, [-0.5, 0.0, 1.3], switches=(Switch(0, 2),))
+    rows = [r | {"row": 0} for r in rows if r["face"] == "switch"]
+    exam = Exam(Path("."), {"referent": "object", "trials": 1, "seed": 0}, pd.DataFrame(rows))
+    new = rows[0]["target"]
+    on_new = contact.grasp_point(worlds.kind(spec.object(new).kind, spec.setup.world), np.asarray(spec.object(new).pos))
+    objects = json.dumps({o.id: [list(o.pos)] * 4 for o in spec.objects})
+
+    def switch_obeyed(*hand: list[float]) -> int:
+        logs = pd.DataFrame([{"row": 0, "ee": [rows[0]["initial_ee"], *hand], "objects": objects, "error": None}])
+        return score(exam, logs, "hand")["faces"]["switch_obeyed"]["k"]
+
+    start = rows[0]["initial_ee"]
+    assert switch_obeyed(on_new.tolist(), start, start) == 0, "over it before the switch, gone after it"
+    assert switch_obeyed(start, on_new.tolist(), on_new.tolist()) == 1, "there from the switch on"
