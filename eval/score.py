@@ -24,8 +24,8 @@ report.json schema (version 2):
       (achieved the ask), obeyed_name (swap: landed on the newly named alternative), true_target
       (swap: landed on the original), occ and nonsense (achieved the original ask), swap_success
       (swap: achieved the new ask), and on exams with switch rows switch_obeyed (the instruction
-      changed mid-course: landed on the newly named alternative, its closest approach counted from
-      the switch step) and switch_blind (went on to the original, counted likewise). `ci` is
+      changed mid-course: from the switch step on, the hand came within the threshold of the newly
+      named alternative last) and switch_blind (of the original last). `ci` is
       Wilson's (every rollout independent); `ci_trials` resamples whole trials,
       whose rollouts share a scene (core/rates.py). `by_level` =
       {"5cm", "2cm", "achieved": {k, n, rate, ci, ci_trials}}: the same face judged as landing

@@ -40,7 +40,7 @@ FACE_MEANINGS = {  # each face in one line, for the report's "How to read this"
     "should sit near 0 (the reference policies read no camera)",
     "nonsense": "the instruction replaced by `xxx`: achieved the original task anyway, i.e. without reading",
     "switch_obeyed": "the instruction changed mid-course, from a recorded step on, to name another object: landed on "
-    "the newly named one (from the switch step on)",
+    "the newly named one (where the hand went last after the switch)",
     "switch_blind": "the same switch rows: went on to the original target",
 }
 UNTRAINED = " (pointer not trained: not a prediction)"  # prediction rows of a policy whose pointer was never trained

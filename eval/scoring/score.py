@@ -62,20 +62,24 @@ def judge(
     """What one rollout did to each thing it could have done, judged up to `steps` (default: all
     of it): the row's alternatives and every other object the hand can land on (`landable`).
     `turns`: the movable containers' orientations, where logged (a turned basket's box turns).
-    A switch row's landings count from its switch step: where the hand went before the new name
-    was given is no landing on it."""
+    A switch row's landings count from its switch step (where the hand went before the new name
+    was given is no landing on it), and each alternative keeps its distance per step (`track`),
+    which `landed` reads for where the hand went last."""
     spec = EpisodeSpec.from_json(row["spec"])
     end = len(ee) - 1 if steps is None else steps
     outcome = logged_outcome(ee, objects, end, turns)
     listed = json.loads(row["alternatives"])
     alternatives = [(a["target"], a["program"]) for a in listed]
-    window = slice(min(_switch_step(row), end), end + 1)
+    since = min(_switch_step(row), end)
+    window = slice(since, end + 1)
     result = {}
     for alt in alternatives + landable(spec, alternatives):
         goal = goal_of(listed, *alt)
         aimed = spec.asking(*alt, goal).goals()[goal]  # a task of more goals: the renamed goal's motion is the landing
         distances = contact_distance(aimed, {k: v[window] for k, v in objects.items()}, *alt, ee[window])
         result[alt] = {"achieved": achieved(spec, outcome, *alt, goal), "distance": float(np.min(distances))}
+        if since:  # a switch row judged past its switch: where the hand went last decides (`landed`)
+            result[alt]["track"] = distances
     return result
 
 
@@ -117,14 +121,33 @@ def _landing(spec: EpisodeSpec) -> str:
 
 
 def landed(judged: dict, threshold: float = LANDING) -> tuple[str, str] | None:
+    """The alternative a rollout lands on: the one it achieved, else the one its hand came closest
+    to within `threshold` (ties: none). A switch row (`judge` kept its `track`) lands where the hand
+    last came within `threshold` after the switch: a hand already over the original when the name
+    changes that then goes to the new one obeyed it; one that goes on, or back, to the original did not."""
     done = [a for a, j in judged.items() if j["achieved"]]
     if done:
         return min(done, key=lambda a: judged[a]["distance"])
+    if any("track" in j for j in judged.values()):
+        return _landed_last(judged, threshold)
     ranked = sorted(judged, key=lambda a: judged[a]["distance"])
     best = judged[ranked[0]]["distance"]
     if best > threshold or (len(ranked) > 1 and judged[ranked[1]]["distance"] - best < 1e-9):
         return None
     return ranked[0]
+
+
+def _landed_last(judged: dict, threshold: float) -> tuple[str, str] | None:
+    """The alternative the hand came within `threshold` of last (at one step: the nearer; ties: none)."""
+    last = {a: np.flatnonzero(j["track"] <= threshold) for a, j in judged.items()}
+    last = {a: int(steps[-1]) for a, steps in last.items() if len(steps)}
+    if not last:
+        return None
+    step = max(last.values())
+    there = sorted((float(judged[a]["track"][step]), a) for a, at in last.items() if at == step)
+    if len(there) > 1 and there[1][0] - there[0][0] < 1e-9:
+        return None
+    return there[0][1]
 
 
 START_TOLERANCE = 0.002  # m: how far a logged step-0 object may sit from where its trial starts

@@ -87,7 +87,8 @@ def test_a_landing_on_the_object_no_swap_names_is_a_distractors(world: str) -> N
 def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
     """A hand over the newly named object before the switch has not obeyed a name it was not yet
     given: a switch row is judged from its switch step (where it went before that counts for
-    nothing), so passing over it and leaving is no landing, and staying there is one."""
+    nothing), and lands where the hand last came within 5 cm: over the original when told, then
+    on to the new one, obeyed; to the new one and back to the original, blind."""
     referent = registry.load("object", world="native")
     spec = plan(referent, 1, seed=0, setup=default_setup(referent), split="exam")[0]
     values = {a.id: a.value for a in referent.alternatives(spec)}
@@ -98,10 +99,16 @@ def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
     on_new = contact.grasp_point(worlds.kind(spec.object(new).kind, spec.setup.world), np.asarray(spec.object(new).pos))
     objects = json.dumps({o.id: [list(o.pos)] * 4 for o in spec.objects})
 
-    def switch_obeyed(*hand: list[float]) -> int:
+    def switch_obeyed(*hand: list[float]) -> tuple[int, int]:
+        """The switch row's (obeyed, blind) for a hand at `hand` at steps 1, 2, 3 (the switch comes at 2)."""
         logs = pd.DataFrame([{"row": 0, "ee": [rows[0]["initial_ee"], *hand], "objects": objects, "error": None}])
-        return score(exam, logs, "hand")["faces"]["switch_obeyed"]["k"]
+        faces = score(exam, logs, "hand")["faces"]
+        return faces["switch_obeyed"]["k"], faces["switch_blind"]["k"]
 
-    start = rows[0]["initial_ee"]
-    assert switch_obeyed(on_new.tolist(), start, start) == 0, "over it before the switch, gone after it"
-    assert switch_obeyed(start, on_new.tolist(), on_new.tolist()) == 1, "there from the switch on"
+    start, new_ = rows[0]["initial_ee"], on_new.tolist()
+    old = spec.object(spec.target)
+    on_old = contact.grasp_point(worlds.kind(old.kind, spec.setup.world), np.asarray(old.pos)).tolist()
+    assert switch_obeyed(new_, start, start) == (0, 0), "over it before the switch, gone after it"
+    assert switch_obeyed(start, new_, new_) == (1, 0), "there from the switch on"
+    assert switch_obeyed(on_old, on_old, new_) == (1, 0), "over the original when told, then on to the new one"
+    assert switch_obeyed(on_old, new_, on_old) == (0, 1), "to the new one, then back to the original"

@@ -29,7 +29,7 @@ def readme_loop() -> str:
 def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path: Path) -> None:
     """A lab pastes the loop docs/EXAMS.md prints into a folder of its own and runs it: it makes its exam,
     takes every row through the documented env, logs and scores them; nothing the policy side
-    receives holds the answer, and its policy obeys the name."""
+    receives holds the answer, and its policy obeys the name, on a switch row the new one too."""
     ran = subprocess.run([sys.executable, "-c", readme_loop()], capture_output=True, text=True, cwd=tmp_path)
     assert ran.returncode == 0, ran.stderr[-3000:]
     exam = tmp_path / "datasets" / "object-exam-libero"
@@ -47,6 +47,8 @@ def test_the_readmes_own_loop_runs_as_printed_and_reads_the_instruction(tmp_path
     faces = report["faces"]
     assert faces["obeyed_name"]["rate"] >= 0.8 and faces["true_target"]["rate"] <= 0.1  # it reads the instruction
     assert faces["nonsense"]["k"] == 0 and faces["task"]["k"] == 0  # it never lifts anything
+    switched = faces["switch_obeyed"]  # it is given info["instruction"], which changes on a switch row
+    assert switched["n"] >= 4 and switched["rate"] >= 0.75 and faces["switch_blind"]["k"] == 0, switched
 
 
 @pytest.mark.parametrize(
