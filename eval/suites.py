@@ -7,7 +7,8 @@ Each suite's canonical exam (python -m gen.canonical suite=<name>: LIBERO's own 
 that suite, its objects built into the scene, the perturbed instruction delivered) is made once in
 `exams` (reused while its options are the same), the policy takes each (python -m eval, kept
 rollouts and all: a killed run continues with resume=true), and `out` gets one report: a row
-per suite with its task rate, obeyed name, true target, occ and nonsense, each with k/n and the
+per suite with its task rate, obeyed name, true target, occ, nonsense and switch obeyed (a dash
+where its exam has no such rows: `switches=0`), each with k/n and the
 interval that resamples trials (report.json, report.md), and a picture with one bar group per
 suite (suites.png). `suites=all` takes every suite of `world` whose files are installed and
 whose tasks our skills can do (docs/LIBERO.md lists them, and why the others are not).
@@ -30,7 +31,7 @@ from eval.policies.registry import make
 from gen.products.canonical import CanonicalOptions, build, suite_of
 from jobs.cli import UserError, main
 
-FACES = ("task", "obeyed_name", "true_target", "occ", "nonsense")
+FACES = ("task", "obeyed_name", "true_target", "occ", "nonsense", "switch_obeyed")
 PICTURE = "suites.png"
 
 
@@ -43,6 +44,7 @@ class SuitesOptions:
     tasks: int | None = None  # only each suite's first this many covered tasks (a quick look); default all
     seed: int = 0
     image_size: int = 256  # the exams' frames (the policy's side)
+    switches: int = 1  # switch rows per trial in each exam (the instruction changed mid-course); 0: none
     look: str = FAST  # fast | full: how the exams' cameras draw (core/spec.py LOOKS)
     exams: str = "datasets/suites"  # where each suite's canonical exam is made, or found
     out: str | None = None  # the report; default runs/suites/<policy>
@@ -79,6 +81,7 @@ def _exam(options: SuitesOptions, suite: str) -> Path:
     """The suite's canonical exam in `exams`: made unless one of the same options is there."""
     some = f"-t{options.tasks}" if options.tasks else ""
     some += f"-{options.look}" if options.look != FAST else ""
+    some += f"-sw{options.switches}" if options.switches != 1 else ""
     folder = Path(options.exams) / f"{suite}-s{options.states}-seed{options.seed}-{options.image_size}px{some}"
     made = CanonicalOptions(
         states=options.states,
@@ -88,6 +91,7 @@ def _exam(options: SuitesOptions, suite: str) -> Path:
         suite=suite,
         tasks=options.tasks,
         look=options.look,
+        switches=options.switches,
     )
     if not (folder / "exam.json").is_file():
         build(made)
@@ -149,8 +153,8 @@ def table(policy: str, rows: list[dict]) -> str:
     lines = [
         f"# `{policy}` across LIBERO's suites",
         "",
-        "| suite | task | obeyed name | true target | occ | nonsense |",
-        "|---|---|---|---|---|---|",
+        "| suite | task | obeyed name | true target | occ | nonsense | switch obeyed |",
+        "|---|---|---|---|---|---|---|",
     ]
     lines += [f"| {r['suite']} | " + " | ".join(_cell(r["faces"][f]) for f in FACES) + " |" for r in rows]
     return "\n".join(lines) + "\n"
