@@ -28,6 +28,8 @@ def validate(cfg: TrainConfig) -> None:
         raise UserError(f"favour needs balance=true and favour_share in (0, 1), got {cfg.balance}, {cfg.favour_share}")
     if not 0 <= cfg.switched_share < 1:
         raise UserError(f"switched_share is a share of each batch, in [0, 1); got {cfg.switched_share}")
+    if cfg.switched_first < 0:
+        raise UserError(f"switched_first counts frames from a switch, 0 or more; got {cfg.switched_first}")
     if cfg.branch and not Path(cfg.branch).is_file():
         raise UserError(f"branch={cfg.branch} is no training state (a run's stable.pt or last.pt)")
     if cfg.lora.rank < 1:

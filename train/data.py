@@ -240,15 +240,21 @@ def favoured(frames: Frames, group: np.ndarray, types: list[str], share: float) 
 
 
 def after_switch(
-    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float
+    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float, first: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
     """The balance groups (`groups`, or all frames one) with the switched episodes' frames from their
-    switch on split off into a group of their own that takes `share` of every batch, the groups'
-    chances (equal, or `favoured`) scaled to the rest: as they fall, those frames are too few (45
-    switched episodes of 300, their second halves) to outweigh the path under way."""
+    switch on (`first`: only the first this many, where the hand turns) split off into a group of
+    their own that takes `share` of every batch, the groups' chances (equal, or `favoured`) scaled
+    to the rest: as they fall, those frames are too few (45 switched episodes of 300, their second
+    halves) to outweigh the path under way, and the turn is a few frames of each."""
     later = frames.aim != frames.episode if frames.aim is not None else np.zeros(len(frames), bool)
     if not later.any():
         raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
+    if first:
+        index = np.arange(len(frames))
+        switched_at = np.full(len(frames.starts), len(frames))
+        np.minimum.at(switched_at, frames.episode[later], index[later])
+        later &= index - switched_at[frames.episode] < first
     base = np.zeros(len(frames), np.int64) if group is None else group
     n = int(base.max()) + 1
     prior = np.full(n, 1 / n) if chances is None else chances

@@ -68,6 +68,7 @@ class TrainConfig:
     favour: list[str] = field(default_factory=list)  # referent types of a mix that take `favour_share` of each batch
     favour_share: float = 0.5  # with `favour`: their share of each batch together (the other types split the rest)
     switched_share: float = 0.0  # the share of each batch drawn from switched episodes' frames after the switch (0: as they fall)
+    switched_first: int = 0  # with switched_share: only each switched episode's first this many frames from its switch (0: all)
     branch: str = ""  # a training state of another run (its stable.pt, last.pt) this run continues from, in `out`
     out: str = "runs/train/tiny"
     policy: str = "tiny"
@@ -225,7 +226,7 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     draw_from = data.groups(frames) if cfg.balance else None
     chances = data.favoured(frames, draw_from, cfg.favour, cfg.favour_share) if cfg.favour else None
     if cfg.switched_share:
-        draw_from, chances = data.after_switch(frames, draw_from, chances, cfg.switched_share)
+        draw_from, chances = data.after_switch(frames, draw_from, chances, cfg.switched_share, cfg.switched_first)
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()

@@ -57,6 +57,14 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     group, chances = data.after_switch(frames, None, None, 0.8)  # their frames after the switch: 80% of each batch
     drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
     assert abs(np.mean(moved[drawn]) - 0.8) < 0.02 and np.mean(moved) < 0.6
+    group, chances = data.after_switch(frames, None, None, 0.8, first=3)  # only the first 3 frames from each switch
+    turning = np.zeros(len(frames), bool)
+    for ep, switch in zip(records.episode_index, records.switch):
+        if isinstance(switch, str):
+            turning[frames.starts[ep] + json.loads(switch)["step"] + np.arange(3)] = True
+    assert np.array_equal(group == group.max(), turning)
+    drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
+    assert abs(np.mean(turning[drawn]) - 0.8) < 0.02
     unswitched = replace(frames, aim=frames.episode)
     with pytest.raises(data.DatasetError, match="switched_share=0.8 needs switched episodes"):
         data.after_switch(unswitched, None, None, 0.8)
