@@ -96,7 +96,7 @@ def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
     rows = [r | {"row": 0} for r in rows if r["face"] == "switch"]
     exam = Exam(Path("."), {"referent": "object", "trials": 1, "seed": 0}, pd.DataFrame(rows))
     new = rows[0]["target"]
-    on_new = contact.grasp_point(worlds.kind(spec.object(new).kind, spec.setup.world), np.asarray(spec.object(new).pos))
+    on_new = contact.grasp_point(worlds.kind(spec.object(new).kind, spec.setup.world), np.asarray(spec.object(new).pos)).tolist()
     objects = json.dumps({o.id: [list(o.pos)] * 4 for o in spec.objects})
 
     def switch_obeyed(*hand: list[float]) -> tuple[int, int]:
@@ -105,10 +105,9 @@ def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
         faces = score(exam, logs, "hand")["faces"]
         return faces["switch_obeyed"]["k"], faces["switch_blind"]["k"]
 
-    start, new_ = rows[0]["initial_ee"], on_new.tolist()
-    old = spec.object(spec.target)
+    start, old = rows[0]["initial_ee"], spec.object(spec.target)
     on_old = contact.grasp_point(worlds.kind(old.kind, spec.setup.world), np.asarray(old.pos)).tolist()
-    assert switch_obeyed(new_, start, start) == (0, 0), "over it before the switch, gone after it"
-    assert switch_obeyed(start, new_, new_) == (1, 0), "there from the switch on"
-    assert switch_obeyed(on_old, on_old, new_) == (1, 0), "over the original when told, then on to the new one"
-    assert switch_obeyed(on_old, new_, on_old) == (0, 1), "to the new one, then back to the original"
+    assert switch_obeyed(on_new, start, start) == (0, 0), "over it before the switch, gone after it"
+    assert switch_obeyed(start, on_new, on_new) == (1, 0), "there from the switch on"
+    assert switch_obeyed(on_old, on_old, on_new) == (1, 0), "over the original when told, then on to the new one"
+    assert switch_obeyed(on_old, on_new, on_old) == (0, 1), "to the new one, then back to the original"
