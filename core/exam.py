@@ -160,6 +160,11 @@ def goal_of(alternatives: list[dict[str, Any]], target: str, program: str) -> in
     return next((int(a.get("goal", 0)) for a in alternatives if (a["target"], a["program"]) == (target, program)), 0)
 
 
+def switch_of(row: Any) -> dict[str, Any]:
+    """A row's switch, {"step", "instruction"}, or {} on a row (or in an exam) without one."""
+    return json.loads(row.get(SWITCH) or "{}")
+
+
 def switch_choices(trial: int, spec: EpisodeSpec, switches: int) -> list[int]:
     """The counterfactuals a trial's `switches` switch rows name: the next ones in turn from the
     trial's number, so across trials every alternative is switched to as often."""

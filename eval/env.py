@@ -29,7 +29,7 @@ import numpy as np
 from gymnasium import spaces
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from core.exam import SWITCH, Exam, goal_of, read
+from core.exam import Exam, goal_of, read, switch_of
 from core.profiles import STATE_KEY
 from core.programs import achieved
 from core.spec import EpisodeSpec
@@ -82,7 +82,7 @@ class ExamEnv(gym.Env):
     @property
     def instruction(self) -> str:
         """The instruction shown now: the row's, or on a switch row from its step on the new one."""
-        switch = json.loads(self.row.get(SWITCH) or "{}")
+        switch = switch_of(self.row)
         return switch["instruction"] if switch and self._t >= switch["step"] else str(self.row["instruction"])
 
     def _obs(self) -> dict:

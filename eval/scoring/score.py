@@ -21,10 +21,10 @@ from core.exam import (
     LANDING,
     PREDICTION_RADIUS,
     REACH_THRESHOLDS,
-    SWITCH,
     Exam,
     decode_objects,
     goal_of,
+    switch_of,
 )
 from core.products import EXAM_PATH
 from core.programs import achieved
@@ -85,7 +85,7 @@ def judge(
 
 def _switch_step(row: pd.Series) -> int:
     """A switch row's switch step (the first step the new instruction is shown), else 0."""
-    return int(json.loads(row.get(SWITCH) or "{}").get("step", 0))
+    return int(switch_of(row).get("step", 0))
 
 
 def logged_outcome(

@@ -20,7 +20,7 @@ from typing import Protocol
 import numpy as np
 import pandas as pd
 
-from core.exam import SWITCH, goal_of
+from core.exam import goal_of, switch_of
 from core.profiles import IMAGE_PREFIX, NATIVE, PROFILES, STATE_KEY, TASK_KEY, Profile
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
@@ -178,7 +178,7 @@ class Runner:
         spec = EpisodeSpec.from_json(row["spec"])
         log = Log(int(row["row"]))
         start = np.asarray(row["initial_state"])
-        switch = json.loads(row.get(SWITCH) or "{}")
+        switch = switch_of(row)
         at = (int(switch["step"]), str(switch["instruction"])) if switch else None
         target, program = str(row["target"]), str(row["program"])
         goal = goal_of(json.loads(row["alternatives"]), target, program)
