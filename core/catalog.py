@@ -11,9 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from core.furniture import Door, Drawer, Inside, Knob, Shelf, Spot
+from core.furniture import Door, Drawer, Inside, Knob, Shelf, Slot, Spot
 
-Piece = TypeVar("Piece", Spot, Drawer, Knob, Shelf, Door, Inside)
+Piece = TypeVar("Piece", Spot, Drawer, Knob, Shelf, Door, Inside, Slot)
 
 # Named colors an instruction may use, as RGBA.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -80,6 +80,7 @@ class Kind:
     shelf: Shelf | None = None
     door: Door | None = None
     inside: Inside | None = None
+    slot: Slot | None = None
 
     @property
     def is_site(self) -> bool:
@@ -94,10 +95,16 @@ class Kind:
         return self.contain is not None and not self.is_site
 
     def part(self, piece: type[Piece]) -> Piece:
-        """This kind's `piece` (its Spot, Drawer, Knob or Shelf), or a ValueError saying it has none."""
-        found = {Spot: self.spot, Drawer: self.drawer, Knob: self.knob, Shelf: self.shelf, Door: self.door, Inside: self.inside}[
-            piece
-        ]
+        """This kind's `piece` (its Spot, Drawer, Knob, Shelf, Door, Inside or Slot), or a ValueError saying it has none."""
+        found = {
+            Spot: self.spot,
+            Drawer: self.drawer,
+            Knob: self.knob,
+            Shelf: self.shelf,
+            Door: self.door,
+            Inside: self.inside,
+            Slot: self.slot,
+        }[piece]
         if found is None:
             raise ValueError(f"{self.name} has no {piece.__name__.lower()}")
         return found

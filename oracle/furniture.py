@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.furniture import Drawer, Inside, Shelf, Spot
+from core.furniture import Drawer, Inside, Shelf, Slot, Spot
 from core.rotations import facing, turned, yaw_matrix
 from oracle.clearance import CARRY_MARGIN, FINGER_TIP, Clearance
 from oracle.ik import DOWN, grasp_yaw
@@ -45,6 +45,9 @@ PUSH_LOW, PUSH_GAP, PUSH_PAST, PUSH_SPEED = 0.04, 0.02, 0.01, 0.08
 # place (6 mm into its outer face); how far clear of it they come down; how far past shut they are sent (its
 # hinge stops it there); in how many steps along the arc (12 took LIBERO-10's KITCHEN_SCENE6 past its 520)
 DOOR_PRESS, DOOR_CLEAR, DOOR_PAST, DOOR_STEPS = 0.035, 0.04, 0.03, 6
+# standing a thing in a narrow compartment (`_lean_in`): how far over the walls its foot is carried; in how
+# many steps it is tilted there; how far over the floor its foot is let go; the steps it waits once let go
+LEAN_OVER, LEAN_STEPS, LEAN_DROP, LEAN_SETTLE = 0.03, 4, 0.004, 10
 
 
 class FurnitureSkills(Clearance):
@@ -167,7 +170,11 @@ class FurnitureSkills(Clearance):
 
     def put_in(self, object_id: str, place_id: str) -> None:
         """Put the object inside a place: a drawer opened part way first (where it is not open that far
-        already), the microwave's inside let down at its front and pushed in."""
+        already), the microwave's inside let down at its front and pushed in, a narrow compartment
+        stood in leaning."""
+        if self._kind(place_id).slot is not None:
+            self._lean_in(object_id, place_id)
+            return
         if self._kind(place_id).inside is not None:
             self._push_inside(object_id, place_id)
             return
@@ -209,6 +216,34 @@ class FurnitureSkills(Clearance):
         self.move_linear(end, speed=PUSH_SPEED)
         self.move_linear(self.scene.ee_pos() + 2 * INSIDE_BACK * out, speed=0.1)
         self.move_linear(self.scene.ee_pos() + [0.0, 0.0, 2 * INSIDE_RISE], speed=0.1)
+        self.facing = None
+
+    def _lean_in(self, object_id: str, place_id: str) -> None:
+        """Stand the object in a narrow compartment leaning on its wall (core/furniture.py `Slot`): taken
+        from above, the fingers turned to close across the compartment, carried over where its foot goes
+        with its bottom LEAN_OVER over the walls, tilted `lean` toward the wall it will rest on, let down to
+        LEAN_DROP over the floor and let go; the hand then rises out, upright again."""
+        slot, kind = self._kind(place_id).part(Slot), self._kind(object_id)
+        site, rot = self.scene.object_pos(place_id), self.scene.body_pose(place_id)[1]
+        toward = rot @ np.asarray(slot.toward)
+        foot = site - slot.foot * toward
+        foot[2] = site[2] + slot.floor + kind.bottom + LEAN_DROP
+        self.grasp(object_id)
+        self.lift(site[2] + slot.rim + LEAN_OVER - self.scene.object_pos(object_id)[2] + kind.bottom)
+        yaw = grasp_yaw(float(np.arctan2(toward[1], toward[0])))  # the fingers, and the thing's narrow side, across it
+        self.move_to(self.scene.ee_pos(), yaw)
+        hand = self.scene.ee_pos() - self.scene.object_pos(object_id)  # the grip from the thing's origin, upright
+        high = foot + [0.0, 0.0, site[2] + slot.rim + LEAN_OVER - foot[2] + kind.bottom]
+        self.move_to(high + hand, yaw)
+        pivot, upright = np.cross([0.0, 0.0, 1.0], toward), yaw_matrix(yaw) @ DOWN
+        for k in range(1, LEAN_STEPS + 1):  # tilted over the compartment a step at a time
+            turn = turned(pivot / np.linalg.norm(pivot), slot.lean * k / LEAN_STEPS)
+            self.facing = turn @ upright
+            self.move_to(high + turn @ hand)
+        self.move_linear(foot + turn @ hand, speed=0.05)
+        self.open()
+        self.hold(LEAN_SETTLE)
+        self.move_linear(self.scene.ee_pos() + turn @ [0.0, 0.0, 0.1], speed=0.1)
         self.facing = None
 
     def shut(self, place_id: str) -> None:

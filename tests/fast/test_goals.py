@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from core import programs
+from core import programs, worlds
 from core.exam import Exam, trial_rows
 from core.profiles import LIBERO
 from core.spec import THEN, Counterfactual, EpisodeSpec, SceneObject, Setup, SpecError, TaskSpec
@@ -254,3 +254,22 @@ def test_liberos_goals_for_the_microwave_are_in_its_heating_region_and_close_of_
     put_in, close = spec.goals()
     assert predicate(put_in, start, "microwave_inside", "place_in") == ["In", "white_yellow_mug_1", "microwave_1_heating_region"]
     assert predicate(close, start, "microwave_door", "close") == ["Close", "microwave_1"]
+
+
+@pytest.mark.parametrize(("rise", "inside"), [(0.0005, True), (-0.0005, False), (-0.0035, False)])
+def test_a_book_is_in_the_caddys_back_compartment_only_above_liberos_lowered_floor(rise: float, inside: bool) -> None:
+    """LIBERO's `In(black_book_1, desk_caddy_1_back_contain_region)`: the book's origin in the region's
+    box, its floor lowered 1 cm (0.9021 m in LIBERO-10's study). Stood on the compartment's floor its origin
+    is 3.5 mm under that, judged not in; leaning on the wall before it, over it (core/furniture.py `Slot`)."""
+    site = (-0.43364, -0.13936, 0.97258)
+    floor = site[2] - worlds.kind("caddy_back", "libero_10_study").contain[1][2] - 0.01
+    objects = (
+        SceneObject("black_book_1", "black_book", "book", 0, (-0.2, 0.15, 0.883)),
+        SceneObject("caddy_back", "caddy_back", "back compartment of the caddy", 1, site),
+    )
+    setup = Setup(profile=LIBERO.name, cameras=LIBERO.camera_names, world="libero_10_study")
+    task = TaskSpec("place_in", params={"object": "black_book_1"})
+    spec = EpisodeSpec("libero_10", 0, 0, objects, "caddy_back", "", "", (), (), task, setup)
+    begin = {o.id: o.pos for o in objects}
+    outcome = Outcome(begin, {**begin, "black_book_1": (-0.441, -0.139, floor + rise)}, (0.0, 0.0, 1.0))
+    assert programs.succeeded(spec, outcome) is inside

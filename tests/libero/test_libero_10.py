@@ -114,12 +114,13 @@ def test_the_same_pictures_at_liberos_own_initial_states(world: str, look: str, 
     assert farthest <= 0.001, f"an object stands {farthest * 1000:.2f} mm from where LIBERO puts it"
 
 
-# LIBERO-10's tasks of two goals our skills do (core/libero_goals.py reads each as our programs from its
+# LIBERO-10's tasks our skills do, most of two goals (core/libero_goals.py reads each as our programs from its
 # BDDL file; the world standing each, worlds.standing). KITCHEN_SCENE8's goal is three, the stove on too, but every one of its
 # initial states has the knob on already (0.54-1.85 rad, LIBERO's `Turnon` from 0.5): its goals here are
 # the two pots (turned on again, a knob near its 2.1 stop moves too little for our scorer, which judges a
 # turn from where the knob started). LIVING_ROOM_SCENE2's cream cheese and butter are left out: twice in
 # LIBERO's first 10 states the hand comes down on the milk beside the cream cheese, once it misses the butter.
+# STUDY_SCENE1's one goal, the book into the caddy's back compartment, is done leaning (core/furniture.py `Slot`).
 TASKS = (
     "LIVING_ROOM_SCENE1_put_both_the_alphabet_soup_and_the_cream_cheese_box_in_the_basket",
     "LIVING_ROOM_SCENE2_put_both_the_alphabet_soup_and_the_tomato_sauce_in_the_basket",
@@ -129,6 +130,7 @@ TASKS = (
     "KITCHEN_SCENE4_put_the_black_bowl_in_the_bottom_drawer_of_the_cabinet_and_close_it",
     "KITCHEN_SCENE6_put_the_yellow_and_white_mug_in_the_microwave_and_close_it",
     "KITCHEN_SCENE8_put_both_moka_pots_on_the_stove",
+    "STUDY_SCENE1_pick_up_the_book_and_place_it_in_the_back_compartment_of_the_caddy",
 )
 MET_ALREADY = {"KITCHEN_SCENE8_put_both_moka_pots_on_the_stove": "turn_on"}  # a goal every initial state has met
 
@@ -167,8 +169,7 @@ def test_liberos_goals_read_as_our_programs_in_the_oracles_order() -> None:
                                           ("place", "stove_burner", {"object": "moka_pot_2", "at": [-0.045, -0.0]})]  # fmt: skip
     assert read["KITCHEN_SCENE6_put"] == [("place_in", "microwave_inside", {"object": "white_yellow_mug_1"}),
                                           ("close", "microwave_door", {})]  # fmt: skip
-    caddy = next(t for t in libero.tasks(SUITE) if t.startswith("STUDY_SCENE1"))
-    assert libero_goals.goals(libero.problem(SUITE, caddy), worlds.standing(caddy)) is None
+    assert read["STUDY_SCENE1_pick_"] == [("place_in", "caddy_back", {"object": "black_book_1"})]
 
 
 def test_every_task_stands_in_one_world() -> None:
@@ -287,6 +288,26 @@ def test_a_mug_put_in_the_microwave_and_its_door_swung_shut() -> None:
     assert len(demo.actions) <= world.episode_steps
 
 
+def test_a_book_stood_in_the_caddys_back_compartment_leaning() -> None:
+    """STUDY_SCENE1 from LIBERO's own initial state 0: the oracle stands the book in the caddy's back
+    compartment leaning on the wall before it, where LIBERO's `In` (the region's floor lowered 1 cm)
+    holds; standing upright on the compartment's floor its origin would be 3.5 mm under that bound."""
+    task = next(t for t in TASKS if t.startswith("STUDY_SCENE1"))
+    world = worlds.standing(task)
+    setup = world_setup(world)
+    scene, ik = scene_for(_inventory(task), setup.profile, world.name), ArmIK(np.asarray(world.robot_home), world.name)
+    spec, physics = _goals_spec(task, 0, scene, setup)
+    demo = demonstrate(scene, ik, spec, programs.perform, physics, setup.interface.settle_steps)
+    assert demo.outcome is not None, demo.failure
+    book = scene.placed["black_book_1"].body_id
+    lean = np.degrees(np.arccos(scene.data.xmat[book].reshape(3, 3)[2, 2]))
+    site, (_, region) = scene.object_pos(spec.target), worlds.kind("caddy_back", world.name).contain
+    height = scene.object_pos("black_book_1")[2]
+    assert 10 < lean < 25 and height > site[2] - region[2] - 0.01, (lean, height)
+    assert programs.each(spec, demo.outcome) == (True,)
+    assert len(demo.actions) <= world.episode_steps
+
+
 def _places(spec: EpisodeSpec) -> dict[str, str]:
     """The spec's places on furniture: id -> where LIBERO's simulator finds it (`Spot.anchor`)."""
     kinds = {o.id: worlds.kind(o.kind, spec.setup.world) for o in spec.objects}
@@ -395,14 +416,12 @@ def test_the_oracle_does_the_living_rooms_canonical_exam_and_the_remembered_layo
 def test_libero_10s_canonical_exam_spans_the_worlds_of_its_scenes(shared: Shared) -> None:
     """`gen.canonical world=libero_10`: one exam of LIBERO-10's tasks across the worlds its scenes stand
     in, each trial's spec naming its own (exam.json lists them under `worlds`, the audit per world):
-    the kitchens' and the mugs' tasks as LIBERO sets them, with no swap; the one task no world lays out
-    yet (the book into the caddy's back compartment) left out with why."""
+    all ten tasks, the kitchens', the mugs' and the study's as LIBERO sets them, with no swap."""
     exam = read(shared.canonical(SUITE))
     canonical = exam.meta["canonical"]
-    assert len(canonical["tasks"]) == 9, list(canonical["tasks"])
-    assert [t[:18] for t in canonical["left_out"]] == ["STUDY_SCENE1_pick_"]
+    assert len(canonical["tasks"]) == 10 and not canonical["left_out"], list(canonical["tasks"])
     stood = {EpisodeSpec.from_json(s).setup.world for s in exam.trials["spec"]}
-    assert stood == set(exam.meta["worlds"]) == set(SCENES) - {"libero_10_study"} == set(exam.meta["audit"])
+    assert stood == set(exam.meta["worlds"]) == set(SCENES) == set(exam.meta["audit"])
     assert "world" not in exam.meta and exam.meta["command"].startswith("python -m gen.canonical world=libero_10 states=1")
     kitchens = exam.trials[exam.trials["spec"].map(lambda s: "kitchen" in EpisodeSpec.from_json(s).setup.world)]
     assert len(kitchens) and "swap" not in set(kitchens["face"])
@@ -422,7 +441,6 @@ def test_the_oracle_does_the_kitchens_tasks_of_libero_10s_canonical_exam(shared:
     [
         ("gen.canonical", ["world=libero_10_kitchen_scene9"], "unknown world 'libero_10_kitchen_scene9'"),
         ("gen", ["referent=libero_10", "world=libero_10_kitchen_scene3", "n=1"], "lays out only LIBERO's own tasks in world"),
-        ("gen.canonical", ["world=libero_10_study"], "world libero_10_study has no referent type that lays out"),
     ],
 )
 def test_libero_10s_bad_input_is_refused_in_one_line(command: str, argv: list[str], needle: str, tmp_path: Path) -> None:
