@@ -118,8 +118,8 @@ class Slot:
     """A narrow compartment a flat thing stands in (the desk caddy's back one, LIBERO-10's STUDY_SCENE1),
     its place LIBERO's region site in it. LIBERO's `In` wants the thing's origin over the region's box,
     its floor lowered 1 cm: a book standing on the compartment's floor misses it by 3.5 mm (its model's
-    origin is 2.2 mm under its base), one resting against the wall before it, leaning ~18°, is in by
-    1 mm, in LIBERO's simulator as in ours. So a thing is let go leaning `lean` (rad) from upright, its
+    origin is 2.2 mm under its base), one resting against the wall before it, leaning 16–18°, is in by
+    0.4–1.1 mm, in LIBERO's simulator as in ours. So a thing is let go leaning `lean` (rad) from upright, its
     top toward `toward` (the fixture's frame), its foot `foot` from the site away from that wall and
     `floor` below the site; the compartment's walls reach `rim` over the site (oracle/furniture.py
     `_lean_in`)."""

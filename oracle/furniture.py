@@ -227,13 +227,14 @@ class FurnitureSkills(Clearance):
         site, rot = self.scene.object_pos(place_id), self.scene.body_pose(place_id)[1]
         toward = rot @ np.asarray(slot.toward)
         foot = site - slot.foot * toward
-        foot[2] = site[2] + slot.floor + kind.bottom + LEAN_DROP
+        foot[2] = site[2] + slot.floor + kind.bottom + LEAN_DROP  # where its origin is let go
+        over = site[2] + slot.rim + LEAN_OVER + kind.bottom  # its origin's height, its bottom LEAN_OVER over the walls
         self.grasp(object_id)
-        self.lift(site[2] + slot.rim + LEAN_OVER - self.scene.object_pos(object_id)[2] + kind.bottom)
+        self.lift(over - self.scene.object_pos(object_id)[2])
         yaw = grasp_yaw(float(np.arctan2(toward[1], toward[0])))  # the fingers, and the thing's narrow side, across it
         self.move_to(self.scene.ee_pos(), yaw)
         hand = self.scene.ee_pos() - self.scene.object_pos(object_id)  # the grip from the thing's origin, upright
-        high = foot + [0.0, 0.0, site[2] + slot.rim + LEAN_OVER - foot[2] + kind.bottom]
+        high = np.array([foot[0], foot[1], over])
         self.move_to(high + hand, yaw)
         pivot, upright = np.cross([0.0, 0.0, 1.0], toward), yaw_matrix(yaw) @ DOWN
         for k in range(1, LEAN_STEPS + 1):  # tilted over the compartment a step at a time
