@@ -16,7 +16,7 @@ from core import programs, worlds
 from core.exam import Exam, trial_rows
 from core.profiles import LIBERO
 from core.spec import THEN, Counterfactual, EpisodeSpec, SceneObject, Setup, SpecError, TaskSpec
-from core.success import Outcome
+from core.success import CONTAIN_FLOOR, Outcome
 from eval.scoring.score import score
 from eval.sims.libero import RowStart, predicate
 
@@ -262,7 +262,7 @@ def test_a_book_is_in_the_caddys_back_compartment_only_above_liberos_lowered_flo
     box, its floor lowered 1 cm (0.9021 m in LIBERO-10's study). Stood on the compartment's floor its origin
     is 3.5 mm under that, judged not in; leaning on the wall before it, over it (core/furniture.py `Slot`)."""
     site = (-0.43364, -0.13936, 0.97258)
-    floor = site[2] - worlds.kind("caddy_back", "libero_10_study").contain[1][2] - 0.01
+    floor = site[2] - worlds.kind("caddy_back", "libero_10_study").contain[1][2] - CONTAIN_FLOOR
     objects = (
         SceneObject("black_book_1", "black_book", "book", 0, (-0.2, 0.15, 0.883)),
         SceneObject("caddy_back", "caddy_back", "back compartment of the caddy", 1, site),
