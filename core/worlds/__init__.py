@@ -137,6 +137,9 @@ class World:
     # LIBERO's scenes the world stands, by the start of their tasks' names, where one suite's tasks span
     # several worlds (LIBERO-10's kitchens, living room and study: `standing`)
     scenes: tuple[str, ...] = ()
+    # the LIBERO-PRO suite whose layout of `scenes` this world stands, where that suite moves the
+    # furniture ('' for LIBERO's own): its canonical exam only, never the scene's world (`standing`)
+    pro_suite: str = ""
     robot_faces: int = 2000  # the robot's visual meshes are decimated to this many triangles each (oracle/meshes.py)
     episode_steps: int = 0  # the steps an evaluation of the suite allows (lerobot's LIBERO env), after its settle steps
     body_name: Callable[[str, int], str] = _numbered  # the model's name for the i-th (from 0) body of a kind
@@ -179,7 +182,7 @@ def world(name: str) -> World:
 
 def standing(task: str) -> World:
     """The world that stands a LIBERO task's scene, where a world says which scenes it stands (`scenes`)."""
-    found = [w for w in _worlds().values() if w.scenes and w.stands(task)] if task else []
+    found = [w for w in _worlds().values() if w.scenes and not w.pro_suite and w.stands(task)] if task else []
     if len(found) != 1:
         raise UnknownWorld(f"{len(found) or 'no'} world(s) stand the scene of task {task!r}")
     return found[0]

@@ -155,7 +155,7 @@ def _base_suites() -> dict[str, list[str]]:
     """Each LIBERO suite a world lays out -> those worlds (LIBERO-10's tasks span several)."""
     found: dict[str, list[str]] = {}
     for name in worlds.names():
-        if worlds.world(name).suite:
+        if worlds.world(name).suite and not worlds.world(name).pro_suite:
             found.setdefault(worlds.world(name).suite, []).append(name)
     return found
 
@@ -191,8 +191,11 @@ def _why_not(world: worlds.World, referent: Referent, suite: str, task: str) -> 
     if other:
         return f"its furniture ({', '.join(other)}) is not world {world.name}'s"
     moved = _moved_fixtures(problem, libero.problem(world.suite, libero.base_task(suite, task)))
-    if moved:
-        return f"LIBERO-PRO moves its {', '.join(moved)}, which our scenes stand where LIBERO's own suite does"
+    if moved and world.pro_suite != suite:
+        return (
+            f"LIBERO-PRO moves its {', '.join(moved)}, and no world stands the scene as {suite} lays it out "
+            f"(a twin world with pro_suite={suite}, core/worlds/)"
+        )
     assert referent.code.canonical is not None
     design = referent.code.canonical(referent.config, problem)
     if design is None:
@@ -226,6 +229,13 @@ def _moved_fixtures(problem: libero.Problem, base: libero.Problem) -> list[str]:
     return sorted(name for _, name, region in placed if where.get(name, region) != region)
 
 
+def _laid_out(world: worlds.World, suite: str) -> worlds.World:
+    """The world that stands `world`'s scenes as `suite` lays them out: its LIBERO-PRO twin where that
+    suite moves the furniture (World.pro_suite), else `world` itself."""
+    twins = (worlds.world(n) for n in worlds.names())
+    return next((w for w in twins if w.pro_suite == suite and (w.suite, w.scenes) == (world.suite, world.scenes)), world)
+
+
 def _on_scene(world: worlds.World, x: float, y: float) -> bool:
     """Whether a place is on the world's scene (LIBERO-PRO parks the objects a suite takes away
     metres off it, e.g. at x = 10 m): its reach, with a margin for LIBERO's regions at its edges."""
@@ -252,9 +262,12 @@ def suite_of(options: CanonicalOptions) -> Suite:
     if options.world and options.suite and base != world.suite:
         raise UserError(f"suite={options.suite} perturbs {base}, not world={options.world}: leave world= out")
     if options.world and not options.suite:
-        name = world.suite  # its own suite's tasks, those of its scenes where the suite's span several worlds
+        name = world.pro_suite or world.suite  # its own suite's tasks, those of its scenes where the suite's span several worlds
     if name not in libero.suites(world.suite):
         raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
+    if world.pro_suite and name != world.pro_suite:
+        raise UserError(f"world {world.name} stands its scenes as {world.pro_suite} lays them out: suite={world.pro_suite} only")
+    world = _laid_out(world, name)
     referent = _task_type(world.name)
     if referent is None:
         raise UserError(

@@ -12,17 +12,19 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from core import libero
+from core import libero, worlds
 from core.exam import read
 from core.spec import FAST, FULL
 from eval.policies.registry import make
 from eval.scoring.battery import take
 from gen.planning.plan import world_setup
-from gen.products.canonical import CanonicalOptions, build, suite_of, trial_spec
+from gen.products.canonical import CanonicalOptions, build, suite_of, suites_of, trial_spec
 from helpers import initial_state_pictures, rows_of
 from jobs.cli import UserError
+from referents import registry
 
 BASES = ("libero_object", "libero_spatial", "libero_goal")
 EVERY = bool(os.environ.get("LIBERO_PRO_ALL"))  # the figures in docs/: every covered suite and task
@@ -114,6 +116,7 @@ def test_suites_that_change_no_words_deliver_the_base_tasks_instruction() -> Non
         (["suite=libero_goal_task"], "our skills cannot do it"),
         (["suite=libero_object_swap", "world=libero_spatial"], "suite=libero_object_swap perturbs libero_object"),
         (["suite=libero_spatial_with_milk", "states=11"], "states must be between 1 and 10"),
+        (["suite=libero_10_lan", "world=libero_10_kitchen_scene6_swap"], "suite=libero_10_swap only"),
     ],
 )
 def test_bad_suites_are_refused_in_one_line(argv: list[str], needle: str, tmp_path: Path) -> None:
@@ -149,6 +152,35 @@ def test_a_task_whose_fixtures_the_suite_moves_is_left_out_saying_so() -> None:
     assert "LIBERO-PRO moves its flat_stove_1" in left["put_the_cream_cheese_in_the_bowl"]
     unmoved = suite_of(CanonicalOptions(suite="libero_goal_with_mug"))  # its fixtures stand as LIBERO's: every task kept
     assert len(unmoved.tasks) == len(libero.tasks("libero_goal_with_mug")) and not unmoved.left_out
+
+
+def test_a_scene_whose_furniture_the_suite_moves_is_stood_by_its_twin_world() -> None:
+    """libero_10_swap trades KITCHEN_SCENE6's microwave and white mug: the suite's exam stands that scene in
+    its twin world (`World.pro_suite`), the microwave at the centre of the region PRO's BDDL file names for
+    it and the places in it moved as far, so the suite covers 8 of its 10 tasks; LIBERO-10's own exam, and
+    every world lookup by task, keep the scene's own world."""
+    task = "KITCHEN_SCENE6_put_the_yellow_and_white_mug_in_the_microwave_and_close_it"
+    suites, left = suites_of(CanonicalOptions(suite="libero_10_swap"))
+    assert sum(len(s.tasks) for s in suites) >= 8 and task not in left
+    twin = next(s.world for s in suites if task in s.tasks)
+    own = worlds.standing(task)
+    assert (twin.name, twin.pro_suite, own.name) == (
+        "libero_10_kitchen_scene6_swap",
+        "libero_10_swap",
+        "libero_10_kitchen_scene6",
+    )
+    assert next(s.world for s in suites_of(CanonicalOptions(world="libero_10"))[0] if task in s.tasks) == own
+    problem = libero.problem("libero_10_swap", task)
+    names = {f"{problem.targets.get(r, '')}_{r}": r for r in problem.regions}
+    stands = {pred[1]: problem.centre(names[pred[2]]) for pred in problem.init if pred[0] == "On" and pred[1] in problem.fixtures}
+    moved = {}
+    for placed, before in zip(twin.fixtures, own.fixtures):
+        assert np.allclose(placed.pos[:2], stands[placed.name], atol=1e-9), placed.name
+        moved[placed.name] = np.subtract(placed.pos, before.pos)
+    theirs, ours = (registry.load("libero_10", world=w.name).config for w in (own, twin))
+    for place, slot in theirs.extra["sites"].items():  # the places in it: its inside and its door
+        was, now = theirs.layout.slots[slot], ours.layout.slots[ours.extra["sites"][place]]
+        assert np.allclose(np.subtract(now, was), moved["microwave_1"]), (place, was, now)
 
 
 def test_no_swap_names_an_object_the_suite_parked_off_the_scene(tmp_path: Path) -> None:
