@@ -105,9 +105,12 @@ class Clearance(Motion):
                 break
         return max(gaps, key=lambda yaw: gaps[yaw], default=self.yaw)
 
+    def standing(self, *besides: str | None) -> list[str]:
+        """The objects standing in the scene (not the places on furniture), those `besides` aside."""
+        return [o.id for o in self.spec.objects if o.id not in besides and not self._kind(o.id).is_site]
+
     def _gap(self, path: list[np.ndarray], destination_id: str) -> float:
         """How close (up to CARRY_MARGIN) the hand, with what it holds, passes the objects standing in
         the scene, the destination aside, along the joint path `path`."""
         held = self.held[0] if self.held else None
-        standing = [o.id for o in self.spec.objects if o.id not in (held, destination_id) and not self._kind(o.id).is_site]
-        return self.scene.hand_gap(path, held, standing, CARRY_MARGIN)
+        return self.scene.hand_gap(path, held, self.standing(held, destination_id), CARRY_MARGIN)

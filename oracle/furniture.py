@@ -124,11 +124,7 @@ class FurnitureSkills(Clearance):
         half = max(kind.inner - BESIDE_MARGIN, 0.0)  # where a thing's origin may come on it
         if kind.contain is not None and held:  # in it: the whole thing inside
             half = max(kind.contain[1][0] - min(self._kind(held).size[:2]) / 2 - BESIDE_MARGIN, 0.0)
-        standing = (
-            self.scene.object_pos(o.id)
-            for o in self.spec.objects
-            if o.id not in (held, destination_id) and not self._kind(o.id).is_site
-        )
+        standing = (self.scene.object_pos(o) for o in self.standing(held, destination_id))
         on = [
             at[:2] for at in standing if np.all(np.abs(at[:2] - top[:2]) < max(half, kind.inner)) and at[2] > top[2] - kind.height
         ]

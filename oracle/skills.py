@@ -100,11 +100,10 @@ class Skills(FurnitureSkills):
         narrow, other = (kind.size[0], kind.size[1]) if kind.grasp_axis == "x" else (kind.size[1], kind.size[0])
         if other > catalog.GRIPPER_SPAN - TURN_SPARE or other < narrow * TURN_BOX:  # not a box that fits turned
             return yaw
-        neighbours = [o.id for o in self.spec.objects if o.id != object_id and not self._kind(o.id).is_site]
 
         def gap(at: float) -> float:  # how near the hand closing at that yaw comes to a neighbour
             try:
-                return self.scene.hand_gap([self.ik.solve(point, at, seed=self.q)], None, neighbours, CARRY_MARGIN)
+                return self.scene.hand_gap([self.ik.solve(point, at, seed=self.q)], None, self.standing(object_id), CARRY_MARGIN)
             except IKError:
                 return -np.inf
 
@@ -262,7 +261,7 @@ class Skills(FurnitureSkills):
         axis first, the one whose sweep passes farthest from the other objects' footprints."""
         radius = max(self._kind(object_id).size[:2]) / 2
         start = self.scene.object_pos(object_id)[:2]
-        others = [o.id for o in self.spec.objects if o.id != object_id and not self._kind(o.id).is_site]
+        others = self.standing(object_id)
         routes = [[goal], [np.array([start[0], goal[1]]), goal], [np.array([goal[0], start[1]]), goal]]
 
         def gap(route: list[np.ndarray]) -> float:

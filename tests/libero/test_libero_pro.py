@@ -170,12 +170,9 @@ def test_a_scene_whose_furniture_the_suite_moves_is_stood_by_its_twin_world() ->
         "libero_10_kitchen_scene6",
     )
     assert next(s.world for s in suites_of(CanonicalOptions(world="libero_10"))[0] if task in s.tasks) == own
-    problem = libero.problem("libero_10_swap", task)
-    names = {f"{problem.targets.get(r, '')}_{r}": r for r in problem.regions}
-    stands = {pred[1]: problem.centre(names[pred[2]]) for pred in problem.init if pred[0] == "On" and pred[1] in problem.fixtures}
-    moved = {}
+    problem, moved = libero.problem("libero_10_swap", task), {}
     for placed, before in zip(twin.fixtures, own.fixtures):
-        assert np.allclose(placed.pos[:2], stands[placed.name], atol=1e-9), placed.name
+        assert np.allclose(placed.pos[:2], problem.centre(problem.region_of(placed.name)), atol=1e-9), placed.name
         moved[placed.name] = np.subtract(placed.pos, before.pos)
     theirs, ours = (registry.load("libero_10", world=w.name).config for w in (own, twin))
     for place, slot in theirs.extra["sites"].items():  # the places in it: its inside and its door
