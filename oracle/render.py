@@ -9,6 +9,7 @@ on llvmpipe; none of them helps a policy (docs/GENERATE.md: Performance). A scen
 from __future__ import annotations
 
 import atexit
+from collections import OrderedDict
 
 import mujoco
 import numpy as np
@@ -16,6 +17,8 @@ import numpy as np
 from core.profiles import AGENTVIEW, NATIVE
 from core.spec import FULL
 from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
+
+SPARES = 4  # released cameras kept per process: as many as scene_for keeps scenes
 
 
 class Cameras:
@@ -25,6 +28,7 @@ class Cameras:
         if unknown:
             raise ValueError(f"unknown camera(s) {unknown}; known: {', '.join(known)}")
         self.scene = scene
+        self.size = size
         self.cameras = cameras
         # The offscreen buffer is as large as the frames (the model allows up to MAX_IMAGE_SIZE):
         # every frame clears the whole buffer, and a context allocates it at start.
@@ -100,3 +104,26 @@ class Cameras:
         if not self._closed:
             self._closed = True
             self.renderer.close()
+
+
+_spares: OrderedDict[tuple[Scene, int, tuple[str, ...]], Cameras] = OrderedDict()
+
+
+def cameras_for(scene: Scene, size: int, cameras: tuple[str, ...]) -> Cameras:
+    """Cameras for `scene`: a released set of the same scene, size and cameras where one is kept, else
+    new ones. A renderer's start uploads every mesh and texture (about 0.5 s for a LIBERO scene on
+    llvmpipe), which a loop making an environment per exam row would otherwise pay per row."""
+    kept = _spares.pop((scene, size, cameras), None)
+    return kept if kept is not None else Cameras(scene, size, cameras)
+
+
+def release(cams: Cameras) -> None:
+    """Done with `cams`: kept for the next cameras_for of their scene; past SPARES, the oldest kept is closed."""
+    if cams._closed:
+        return
+    key = (cams.scene, cams.size, cams.cameras)
+    if key in _spares and _spares[key] is not cams:
+        _spares.pop(key).close()
+    _spares[key] = cams
+    while len(_spares) > SPARES:
+        _spares.popitem(last=False)[1].close()

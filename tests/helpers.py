@@ -345,8 +345,11 @@ def liberos_replay(dataset: Path, world: World) -> dict:
 
 
 def make_dataset(out: Path, *overrides: str) -> Path:
-    """Generate a dataset through the real CLI config and pipeline."""
-    generate(parse([f"out={out}", *overrides]), progress=False)
+    """Generate a dataset through the real CLI config and pipeline, in this process unless `overrides`
+    name workers: the test processes already keep every core busy, and a worker pool's start (imports,
+    scenes compiled again) costs a small set more than its episodes (test_dataset: the same bytes)."""
+    workers = () if any(o.startswith("workers=") for o in overrides) else ("workers=1",)
+    generate(parse([f"out={out}", *workers, *overrides]), progress=False)
     return out
 
 

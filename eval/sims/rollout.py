@@ -25,7 +25,7 @@ from core.profiles import IMAGE_PREFIX, NATIVE, PROFILES, STATE_KEY, TASK_KEY, P
 from core.spec import EpisodeSpec
 from eval.policies import Context, Policy
 from eval.sims.log import Log
-from oracle.render import Cameras
+from oracle.render import Cameras, cameras_for, release
 from oracle.scene import Scene, spec_scene
 
 
@@ -133,7 +133,7 @@ class OurSim:
         if render:
             key = (scene, spec.setup.image_size, spec.setup.cameras)  # a scene per inventory, profile, world and look
             if key not in self._cameras:
-                self._cameras[key] = Cameras(scene, spec.setup.image_size, spec.setup.cameras)
+                self._cameras[key] = cameras_for(scene, spec.setup.image_size, spec.setup.cameras)
             self.cameras = self._cameras[key]
 
     def step(self, action: np.ndarray) -> None:
@@ -162,7 +162,9 @@ class OurSim:
 
     def close(self) -> None:
         for cams in self._cameras.values():
-            cams.close()
+            release(cams)
+        self._cameras.clear()
+        self.cameras = None
 
 
 class Runner:

@@ -120,7 +120,11 @@ def test_overwrite_replaces_only_what_this_project_wrote(existing: Path, tmp_pat
         assert refused.returncode == 2 and len(lines) == 1 and "keep.txt" in lines[0] and "did not write" in lines[0], lines
         assert _untouched(existing)
     ours = tmp_path / "ours"
-    for product in (["n=2", "plan_only=true"], ["n=1", "image_size=32"], ["n=1", "split=exam", "image_size=32"]):
+    for product in (
+        ["n=2", "plan_only=true"],
+        ["n=1", "image_size=32", "workers=1"],
+        ["n=1", "split=exam", "image_size=32", "workers=1"],
+    ):
         result = run_gen(*product, f"out={ours}", "overwrite=true")  # each replaces the product before it
         assert result.returncode == 0, result.stderr
     assert (ours / "exam.json").exists() and not (ours / "meta").exists()

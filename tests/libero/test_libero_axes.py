@@ -89,7 +89,7 @@ def mixed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """PER_TYPE episodes of each new axis, at 64 px, in one dataset (each type in its own world)."""
     types = ",".join(f"{name}@{world}" for name, world in AXES.items())
     root = tmp_path_factory.mktemp("axes") / "mixed"
-    return make_dataset(root, f"referent=[{types}]", f"n={PER_TYPE * len(AXES)}", "image_size=64", "seed=1", "workers=2")
+    return make_dataset(root, f"referent=[{types}]", f"n={PER_TYPE * len(AXES)}", "image_size=64", "seed=1", "workers=1")
 
 
 def test_lerobot_reads_it_and_every_types_written_audit_finds_no_leak(mixed: Path) -> None:
@@ -158,7 +158,7 @@ def test_its_exam_separates_the_reference_policies(name: str, tmp_path: Path) ->
     exam = read(make_dataset(tmp_path / "exam", *args))  # switches=0: the switch face has its own tests
     read_of = {"oracle": ["task", "swap"], "position": ["swap"]}  # the faces read of each below
     faces = {
-        p: take(exam, rows_of(exam, read_of[p]), make(p), tmp_path / p, workers=2, policy_name=p, baseline=False)[0]["faces"]
+        p: take(exam, rows_of(exam, read_of[p]), make(p), tmp_path / p, policy_name=p, baseline=False)[0]["faces"]
         for p in read_of
     }
     assert faces["oracle"]["task"]["rate"] == 1.0 and faces["oracle"]["obeyed_name"]["rate"] == 1.0

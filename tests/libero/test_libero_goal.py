@@ -248,5 +248,5 @@ def test_on_displaced_objects_the_remembered_layout_fails(tmp_path: Path) -> Non
     )
     exam = read(root)
     tasks = rows_of(exam, ["task"])  # the face read below
-    report, _ = take(exam, tasks, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    report, _ = take(exam, tasks, make("position"), tmp_path / "position", policy_name="position", baseline=False)
     assert report["faces"]["task"]["rate"] <= 0.4, report["faces"]["task"]

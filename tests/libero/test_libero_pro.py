@@ -239,18 +239,18 @@ def test_a_policy_through_several_suites_gets_one_report(tmp_path: Path) -> None
     report row per suite, and the blind policy's signature: LIBERO-Object's tasks done and no swap
     obeyed, libero_object_swap's tasks failed (the target no longer stands where it remembers)."""
     out = tmp_path / "report"
-    args = ["policy=position", "suites=[libero_object,libero_object_swap]", "states=1", "tasks=2", "image_size=32", "switches=0"]
+    args = ["policy=position", "suites=[libero_object,libero_object_swap]", "states=1", "tasks=1", "image_size=32", "switches=0"]
     done = subprocess.run(
         [sys.executable, "-m", "eval.suites", *args, f"exams={tmp_path / 'exams'}", f"out={out}"], capture_output=True, text=True
     )
     assert done.returncode == 0, done.stderr[-2000:]
     report = json.loads((out / "report.json").read_text())
     assert [r["suite"] for r in report["suites"]] == ["libero_object", "libero_object_swap"]
-    assert all(r["faces"]["task"]["n"] == 2 for r in report["suites"])
+    assert all(r["faces"]["task"]["n"] == 1 for r in report["suites"])
     assert (out / "suites.png").is_file() and "| libero_object_swap |" in (out / "report.md").read_text()
     base, swap = (r["faces"] for r in report["suites"])
     assert base["task"]["rate"] == 1.0 and base["obeyed_name"]["rate"] == 0.0 and base["true_target"]["rate"] == 1.0
-    assert swap["task"]["rate"] <= 0.2 and base["switch_obeyed"]["n"] == 0  # switches=0: exams without the face
+    assert swap["task"]["rate"] == 0.0 and base["switch_obeyed"]["n"] == 0  # switches=0: exams without the face
 
 
 def test_liberos_ten_objects_are_kinds_and_its_pro_tasks_find_their_base() -> None:

@@ -136,7 +136,7 @@ def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> 
     root = make_dataset(tmp_path / "exam", f"referent={SUITE}", "n=6", "split=exam", "image_size=32", "seed=2", "switches=0")
     exam = read(root)
     swaps = rows_of(exam, ["swap"])  # the face read below
-    report, _ = take(exam, swaps, make("position"), tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    report, _ = take(exam, swaps, make("position"), tmp_path / "position", policy_name="position", baseline=False)
     obeyed = report["faces"]["obeyed_name"]
     # chance counts every object a hand can land on (two bowls, the cookie box, the ramekin); the
     # shortcut goes to a bowl, so it obeys a swap as a blind pick between the two bowls does

@@ -234,6 +234,6 @@ def test_on_a_deconfounded_exam_the_shortcut_obeys_at_chance(tmp_path: Path) -> 
     exam = read(root)
     position = make("position")
     swaps = rows_of(exam, ["swap"])  # the faces read below
-    report, _ = take(exam, swaps, position, tmp_path / "position", workers=2, policy_name="position", baseline=False)
+    report, _ = take(exam, swaps, position, tmp_path / "position", policy_name="position", baseline=False)
     obeyed, true_target = report["faces"]["obeyed_name"], report["faces"]["true_target"]
     assert obeyed["ci"][0] <= obeyed["chance"] <= obeyed["ci"][1] and true_target["rate"] <= 0.5

@@ -18,7 +18,7 @@ from core import parquet
 from core.products import SCENES_PATH
 
 SMALL = ("'axes=[object,relation]'", "per_type=1", "trials=1", "steps_per_axis=1", "image_size=32", "workers=1")
-SMALL += ("threads=1", "'libero=[]'", "canonical=false")
+SMALL += ("threads=1", "'libero=[]'", "canonical=false", "replan=50")  # replan: a whole chunk, fewer looks
 
 
 def _release(*args: str) -> subprocess.CompletedProcess[str]:

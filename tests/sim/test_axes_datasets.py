@@ -1,4 +1,4 @@
-"""`python -m gen referent=<type> n=24` for each of the nine types of the native world writes a
+"""`python -m gen referent=<type> n=20` (the audit's least for a verdict) for each of the nine types of the native world writes a
 dataset that lerobot loads, lerobot-doctor passes, whose every episode replays to success, and
 whose written episodes pass the same confound audit as the plan (LIBERO's world:
 tests/libero/test_libero_world.py)."""
@@ -18,6 +18,7 @@ from core import parquet
 from core.programs import succeeded
 from core.spec import EpisodeSpec
 from core.success import Outcome
+from gen.planning.audit import MIN_EPISODES
 from gen.products import scenes
 from helpers import make_dataset
 from oracle.scene import scene_for
@@ -27,12 +28,13 @@ from referents import registry
 @pytest.fixture(scope="module", params=registry.of_world("native"))
 def dataset(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("axes") / request.param
-    return make_dataset(out, f"referent={request.param}", "n=24", "image_size=64", "seed=2")
+    # as few episodes as the audit gives a verdict on
+    return make_dataset(out, f"referent={request.param}", f"n={MIN_EPISODES}", "image_size=64", "seed=2")
 
 
 def test_lerobot_loads_and_decodes_every_episode(dataset: Path) -> None:
     ds = LeRobotDataset(f"local/{dataset.name}", root=dataset)
-    assert ds.num_episodes == 24
+    assert ds.num_episodes == MIN_EPISODES
     for ep in range(ds.num_episodes):
         start, end = ds.meta.episodes[ep]["dataset_from_index"], ds.meta.episodes[ep]["dataset_to_index"]
         for idx in (start, end - 1):

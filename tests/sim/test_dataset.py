@@ -93,8 +93,9 @@ def test_scene_records_schema(object_dataset: Path) -> None:
 
 
 def test_same_seed_same_bytes(tmp_path: Path) -> None:
+    """Made in this process and by a pool of fresh workers: the same bytes."""
     a = make_dataset(tmp_path / "a", "n=2", "image_size=32", "seed=3")
-    b = make_dataset(tmp_path / "b", "n=2", "image_size=32", "seed=3")
+    b = make_dataset(tmp_path / "b", "n=2", "image_size=32", "seed=3", "workers=2")
     for rel in (
         "meta/scenes.parquet",
         "data/chunk-000/file-000.parquet",
