@@ -16,9 +16,9 @@ import numpy as np
 
 from core.profiles import AGENTVIEW, NATIVE
 from core.spec import FULL
-from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene
+from oracle.scene import HIDDEN_GROUP, MIRROR_GROUP, Scene, scene_for
 
-SPARES = 4  # released cameras kept per process: as many as scene_for keeps scenes
+SPARES = scene_for.cache_parameters()["maxsize"]  # released cameras kept per process: as many as scenes
 
 
 class Cameras:
