@@ -375,7 +375,8 @@ def collect(options: ReleaseOptions, carried: dict) -> dict:
                 axis, exam = _row_key(name)
                 rows.append({
                     "axis": axis, "exam": exam, "arm": arm, "sim": sim, "weights": digest, "faces": report["faces"],
-                    "position": (report.get("baseline") or None), "rollouts": report.get("rollouts"),
+                    "exam_digest": report.get("exam_digest"), "position": (report.get("baseline") or None),
+                    "rollouts": report.get("rollouts"),
                     "reach_probe": report.get("reach_probe"), "per_object": report.get("per_object"),
                     "simulator_versions": report.get("simulator_versions"),
                 })  # fmt: skip
@@ -384,7 +385,7 @@ def collect(options: ReleaseOptions, carried: dict) -> dict:
         if (report := finished_report(folder, None)) is not None:
             stamp = (folder / WEIGHTS_DIGEST).read_text()
             rows.append({"axis": axis, "exam": "axis", "arm": "named_place", "sim": "ours", "weights": stamp,
-                         "faces": report["faces"]})  # fmt: skip
+                         "faces": report["faces"], "exam_digest": report.get("exam_digest")})  # fmt: skip
         if (exam := root / "exams" / axis / "exam.json").is_file():
             digests[f"named_place {axis}"] = reference_digest(read(str(exam.parent)), "named_place")
     taken = {_key(r) for r in rows}
@@ -492,6 +493,7 @@ def write_docs(results: dict, docs: Path) -> None:
                 "|---|---|---|---|",
                 f"| libero_object | {faces} |",
             ]
+    lines += _exams_taken(results)
     lines += _short_of(results)
     if results["training"]:
         lines += ["", "## Training", ""]
@@ -512,6 +514,36 @@ def write_docs(results: dict, docs: Path) -> None:
     lines += ["Wall time per stage (s, this 2-core machine, summed over the invocations that did its work):", ""]
     lines += [f"- {k}: {v}" for k, v in results["timings_s"].items()]
     (docs / RESULTS).write_text("\n".join(lines) + "\n")
+
+
+def _exams_taken(results: dict) -> list[str]:
+    """Which generation of an exam each row was taken on, where an exam's rows were not all taken
+    on one: an exam regenerated on a machine of another numeric family (tests/sim/test_golden.py)
+    has the same plan but other physics, so a take carried from one machine and a take made on
+    another may stand in one table measured on different trials."""
+    kept: dict[tuple[str, str], dict[str, list[str]]] = {}
+    for r in results["rows"]:
+        digest = (r.get("exam_digest") or "")[:8] or "not recorded"
+        kept.setdefault((r["axis"], r["exam"]), {}).setdefault(digest, []).append(f"{r['arm']} {r['sim']}")
+    mixed = {key: taken for key, taken in kept.items() if len(taken) > 1}
+    if not mixed:
+        return []
+    lines = [
+        "",
+        "## Exams taken in more than one generation",
+        "",
+        "A row carried from an earlier machine was taken on the exam that machine generated; regenerated on a "
+        "machine of another numeric family an exam keeps its plan (scenes, instructions, swaps) but not its "
+        "physics (initial settling, horizons), so these rows were measured on different trials of one design "
+        "(sha256 of the exam's files, first 8 hex digits; rows from before the digest was recorded: not recorded).",
+        "",
+        "| axis | exam | generation: rows |",
+        "|---|---|---|",
+    ]
+    for (axis, exam), taken in mixed.items():
+        generations = "; ".join(f"{digest}: {', '.join(rows)}" for digest, rows in sorted(taken.items()))
+        lines.append(f"| {axis} | {exam} | {generations} |")
+    return lines
 
 
 def _short_of(results: dict) -> list[str]:

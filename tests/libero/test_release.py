@@ -15,7 +15,9 @@ from pathlib import Path
 import pytest
 
 from core import parquet
+from core.exam import read
 from core.products import SCENES_PATH
+from eval.scoring.baseline import exam_digest
 
 SMALL = ("'axes=[object,relation]'", "per_type=1", "trials=1", "steps_per_axis=1", "image_size=32", "workers=1")
 SMALL += ("threads=1", "'libero=[]'", "canonical=false", "replan=50")  # replan: a whole chunk, fewer looks
@@ -41,6 +43,8 @@ def test_the_confounded_arm_runs_end_to_end_and_resumes(tmp_path: Path) -> None:
     assert rows == {("object", "confounded", "ours"), ("relation", "confounded", "ours"), ("object", "named_place", "ours")}
     measured = next(r for r in results["rows"] if r["arm"] == "confounded" and r["axis"] == "object")
     assert measured["position"]["obeyed_name"]["n"] == measured["faces"]["obeyed_name"]["n"] > 0  # the shortcut, same rows
+    for r in results["rows"]:  # each row names the exam it was taken on
+        assert r["exam_digest"] == exam_digest(read(str(out / "exams" / r["axis"]))), r
     text = (docs / "RESULTS_LIBERO_AXES.md").read_text()
     assert "training deconfounded" in text and "| object |" in text and (docs / "libero_axes.png").is_file()
     assert (docs / "checkpoints" / "libero-release-confounded-lora" / "model.pt").is_file()
