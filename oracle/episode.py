@@ -109,6 +109,7 @@ MOVED = 0.01  # m: how far the thing a program acts on must move before the hand
 CARRIED = 0.05  # m: how high a carried object has risen when a switch that only changes where it goes comes
 LATEST = 0.02  # m from where the hand takes hold of a thing: the latest a training switch comes (coming down, not yet closing)
 ALONG = 0xA10  # the random stream of where on its approach a training episode changes course (`along`)
+DESCENT = 0.75  # the share of training switches drawn from the descent, between the exam's step and LATEST (`along`)
 
 
 def change_course(
@@ -123,7 +124,7 @@ def change_course(
     held across, asked onto a sloping rack), where the hand first comes within the exam's
     SWITCH_DISTANCE of what it takes hold of (`approach_step`, where an exam's switch rows change
     it): at a step drawn from the spec's seed and index up to where the hand is LATEST from it
-    (`along`; at the exam's where the oracle cannot finish from the drawn one). An object taken is
+    (`along`, mostly on the descent; at the exam's where the oracle cannot finish from the drawn one). An object taken is
     never put back: a switch to another object comes before the grasp."""
     first = demonstrate(scene, ik, replace(spec, switch=None), script, state, settle)
     if not first.success:
@@ -143,21 +144,25 @@ def change_course(
         why = "the hand starts there" if step == 0 else "what it acts on never moves"
         return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
     latest = max(step, _first_within(to_hold, LATEST) or step)
-    for at in dict.fromkeys((along(spec, latest), step)):  # the drawn step, else the exam's
+    for at in dict.fromkeys((along(spec, latest, step), step)):  # the drawn step, else the exam's
         demo = _joined(first, at, demonstrate(scene, ik, then, script, state, settle, first.actions[:at]))
         if demo.success:
             break
     return replace(demo, spec=spec)
 
 
-def along(spec: EpisodeSpec, latest: int) -> int:
-    """Where on its approach a training episode changes course: a step in [1, `latest`] (the hand
-    LATEST from where it takes hold) drawn from the spec's seed and index. At an exam's switch step a
-    learned policy's hand is anywhere on its way, not where the oracle's is: a course run's
-    checkpoint trained on switches up to the oracle's 10 cm was already over the grocery and coming
-    down there (1.4 cm off across), where no training switch had shown it a second instruction,
-    and went on down (0/19 obeyed)."""
-    return int(np.random.default_rng([spec.seed, spec.index, ALONG]).integers(1, latest + 1))
+def along(spec: EpisodeSpec, latest: int, descent: int) -> int:
+    """Where on its approach a training episode changes course: a step drawn from the spec's seed
+    and index, DESCENT of them in [`descent`, `latest`] (from where an exam's switch rows change it,
+    the hand 10 cm off, to LATEST), the rest anywhere in [1, `latest`]. At an exam's switch step a
+    learned policy's hand is anywhere on its way, most often already over the original grocery and
+    coming down: a course run's checkpoint trained on switches up to the oracle's 10 cm was there
+    (1.4 cm off across), where no training switch had shown it a second instruction, and went on
+    down (0/19 obeyed); one whose switches were drawn evenly up to LATEST, a quarter of them on the
+    descent, turned there on its own training frames and still went on down in the exam (0/19)."""
+    rng = np.random.default_rng([spec.seed, spec.index, ALONG])
+    first = min(descent, latest) if rng.random() < DESCENT else 1
+    return int(rng.integers(first, latest + 1))
 
 
 def _joined(first: Demo, step: int, then: Demo) -> Demo:

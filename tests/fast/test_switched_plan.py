@@ -33,16 +33,19 @@ def test_the_share_switches_and_every_alternative_is_as_often_the_second_target(
     assert all(kept) and "switch" not in unswitched.specs[0].to_json()
 
 
-def test_a_training_switch_comes_anywhere_along_the_approach(tmp_path: Path) -> None:
-    """oracle/episode.py `along`: a step in [1, the hand 2 cm from what it takes hold of], drawn from
-    the episode's seed and index alone: the same plan switches at the same steps, spread over the way."""
+def test_a_training_switch_comes_mostly_on_the_descent(tmp_path: Path) -> None:
+    """oracle/episode.py `along`: a step in [1, the hand 2 cm from what it takes hold of], most of
+    them from where an exam switches (the hand 10 cm off) on, drawn from the episode's seed and
+    index alone: the same plan switches at the same steps, spread over the way."""
     from oracle.episode import along
 
-    planned = plan_and_audit(parse([f"out={tmp_path / 'plan'}", "n=120", "switched=0.25", "plan_only=true"]))
+    planned = plan_and_audit(parse([f"out={tmp_path / 'plan'}", "n=200", "switched=0.25", "plan_only=true"]))
     switched = [spec for spec in planned.specs if spec.switch is not None]
-    steps = [along(spec, 24) for spec in switched]
+    steps = [along(spec, 24, 14) for spec in switched]
     assert all(1 <= step <= 24 for step in steps) and len(set(steps)) >= 12, steps
-    assert steps == [along(spec, 24) for spec in switched] and along(switched[0], 1) == 1
+    descent = sum(step >= 14 for step in steps) / len(steps)
+    assert 0.65 <= descent <= 0.95 and min(steps) < 14, (descent, steps)
+    assert steps == [along(spec, 24, 14) for spec in switched] and along(switched[0], 1, 1) == 1
 
 
 def test_a_plan_records_where_it_will_switch(tmp_path: Path) -> None:
