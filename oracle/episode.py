@@ -158,8 +158,9 @@ def along(spec: EpisodeSpec, latest: int, descent: int) -> int:
     learned policy's hand is anywhere on its way, most often already over the original grocery and
     coming down: a course run's checkpoint trained on switches up to the oracle's 10 cm was there
     (1.4 cm off across), where no training switch had shown it a second instruction, and went on
-    down (0/19 obeyed); one whose switches were drawn evenly up to LATEST, a quarter of them on the
-    descent, turned there on its own training frames and still went on down in the exam (0/19)."""
+    down (0/19 obeyed), and so did one whose switches were drawn evenly up to LATEST. Drawn here
+    the state is shown, but showing it is not enough: on these switches a checkpoint trained as
+    before still came down under the new name (scripts/switch_probe.py; docs/RESULTS_FACES.md)."""
     rng = np.random.default_rng([spec.seed, spec.index, ALONG])
     first = min(descent, latest) if rng.random() < DESCENT else 1
     return int(rng.integers(first, latest + 1))
