@@ -8,6 +8,8 @@ instruction names (train/data.py `aim`) and can draw the frames after a switch a
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,7 +20,7 @@ from ledataset.datasets.lerobot_dataset import LeRobotDataset
 from core.spec import EpisodeSpec
 from gen.products import scenes
 from gen.verify import verify
-from helpers import lerobot_train, make_dataset
+from helpers import ROOT, lerobot_train, make_dataset
 from train import data
 
 
@@ -68,3 +70,14 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     unswitched = replace(frames, aim=frames.episode)
     with pytest.raises(data.DatasetError, match="switched_share=0.8 needs switched episodes"):
         data.after_switch(unswitched, None, None, 0.8)
+    ckpt = tmp_path / "ckpt"  # scripts/switch_probe.py: a checkpoint's turn at each switch of the set
+    trained = subprocess.run([sys.executable, "-m", "train", f"dataset={root}", "steps=1", "threads=1", f"out={ckpt}"],
+                             capture_output=True, text=True)  # fmt: skip
+    assert trained.returncode == 0, trained.stderr[-2000:]
+    probe = [sys.executable, str(ROOT / "scripts" / "switch_probe.py"), f"dataset={root}"]
+    probed = subprocess.run([*probe, f"policies=[ckpt:{ckpt}]"], capture_output=True, text=True)
+    assert probed.returncode == 0, probed.stderr[-2000:]
+    rows = [line for line in probed.stdout.splitlines() if line.startswith(f"| ckpt:{ckpt} |")]
+    assert "2 switched episodes" in probed.stdout and [r.split("|")[2].strip() for r in rows] == ["switch+0", "switch+5"]
+    refused = subprocess.run([*probe, f"policies=[{ckpt}]"], capture_output=True, text=True)
+    assert refused.returncode == 2 and len(refused.stderr.strip().splitlines()) == 1, refused.stderr
