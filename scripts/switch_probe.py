@@ -37,45 +37,34 @@ def _cosine(u: np.ndarray, v: np.ndarray) -> float:
 def probe(options: ProbeOptions) -> None:
     if not options.dataset or not options.policies or any(not p.startswith("ckpt:") for p in options.policies):
         raise UserError("needs dataset=<a switched set> and 'policies=[ckpt:<folder>,...]'")
-    import torch
-
+    from core.profiles import STATE_KEY
     from train import data
-    from train.policy import load
+    from train.policy import CheckpointPolicy
 
     frames = data.load(options.dataset)
-    later = frames.aim != frames.episode if frames.aim is not None else np.zeros(len(frames), bool)
-    if not later.any():
+    at = data.switch_frames(frames)
+    switches = at[at < len(frames)]
+    if not len(switches):
         raise UserError(f"{options.dataset} has no switched episodes (python -m gen ... switched=<share>)")
-    index = np.arange(len(frames))
-    switches = [int(index[(frames.episode == ep) & later][0]) for ep in np.unique(frames.episode[later])]
     print(f"{len(switches)} switched episodes in {options.dataset}")
     print("| checkpoint | frame | cos(new, oracle) | cos(old, oracle) | rise: oracle | new | old | new the nearer |")
     print("|---|---|---|---|---|---|---|---|")
-    for policy in options.policies:
-        model, _ = load(policy.removeprefix("ckpt:"))
-        model.eval()
-        embedded: dict[int, torch.Tensor] = {}
+    for name in options.policies:
+        policy = CheckpointPolicy(name.removeprefix("ckpt:"))  # the exam's own forward pass
+        features = policy.model.config.features
         for offset in options.offsets:
             rows = []
             for s in switches:
                 i = min(s + offset, int(frames.ends[frames.episode[s]]) - 1)
-                images = {c: torch.from_numpy(np.array(frames.images[c][i]))[None] for c in model.cameras}
-                state = torch.from_numpy(frames.state[i].astype(np.float32))[None]
-                moved = {}
-                for name, task in (("new", int(frames.task[i])), ("old", int(frames.task[s - 1]))):
-                    if task not in embedded:
-                        with torch.inference_mode():
-                            embedded[task] = model.embed([frames.tasks[task]])
-                    with torch.inference_mode():
-                        actions, _, _ = model(images, state, embedded[task])
-                    moved[name] = model.denormalise(actions)[0].numpy()[: options.replan, :3].sum(0)
+                seen = {features.image_key(c): frames.images[c][i] for c in policy.model.cameras} | {STATE_KEY: frames.state[i]}
+                new, old = (policy.chunk(seen | {"task": frames.tasks[t]})[: options.replan, :3].sum(0)
+                            for t in (frames.task[i], frames.task[s - 1]))  # fmt: skip
                 oracle = frames.action[i : i + options.replan, :3].sum(0)
-                new, old = _cosine(moved["new"], oracle), _cosine(moved["old"], oracle)
-                rows.append((new, old, oracle[2], moved["new"][2], moved["old"][2], new > old))
-            m = np.median(np.array(rows, float), axis=0)
-            nearer = np.mean([r[5] for r in rows])
+                rows.append((_cosine(new, oracle), _cosine(old, oracle), oracle[2], new[2], old[2]))
+            m = np.median(np.array(rows), axis=0)
+            nearer = np.mean([r[0] > r[1] for r in rows])
             cells = f"{m[0]:.2f} | {m[1]:.2f} | {m[2]:+.2f} | {m[3]:+.2f} | {m[4]:+.2f} | {nearer:.0%}"
-            print(f"| {policy} | switch+{offset} | {cells} |")
+            print(f"| {name} | switch+{offset} | {cells} |")
 
 
 if __name__ == "__main__":

@@ -239,6 +239,19 @@ def favoured(frames: Frames, group: np.ndarray, types: list[str], share: float) 
     return np.where(chosen, share / chosen.sum(), (1 - share) / (~chosen).sum())
 
 
+def after_switches(frames: Frames) -> np.ndarray:
+    """(N,) whether each frame comes after its episode's switch (its instruction names the second target)."""
+    return frames.aim != frames.episode if frames.aim is not None else np.zeros(len(frames), bool)
+
+
+def switch_frames(frames: Frames) -> np.ndarray:
+    """(episodes,) each episode's first frame after its switch; len(frames) for an episode that never switches."""
+    later = after_switches(frames)
+    switched_at = np.full(len(frames.starts), len(frames))
+    np.minimum.at(switched_at, frames.episode[later], np.flatnonzero(later))
+    return switched_at
+
+
 def after_switch(
     frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float, first: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -247,14 +260,11 @@ def after_switch(
     their own that takes `share` of every batch, the groups' chances (equal, or `favoured`) scaled
     to the rest: as they fall, those frames are too few (45 switched episodes of 300, their second
     halves) to outweigh the path under way, and the turn is a few frames of each."""
-    later = frames.aim != frames.episode if frames.aim is not None else np.zeros(len(frames), bool)
+    later = after_switches(frames)
     if not later.any():
         raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
     if first:
-        index = np.arange(len(frames))
-        switched_at = np.full(len(frames.starts), len(frames))
-        np.minimum.at(switched_at, frames.episode[later], index[later])
-        later &= index - switched_at[frames.episode] < first
+        later &= np.arange(len(frames)) - switch_frames(frames)[frames.episode] < first
     base = np.zeros(len(frames), np.int64) if group is None else group
     n = int(base.max()) + 1
     prior = np.full(n, 1 / n) if chances is None else chances
