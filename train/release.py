@@ -26,6 +26,9 @@ Stages, each done once and reused (train/stages.py), so the run spans as many si
 * **favoured** (`favour`, the fix tried once for axes that fall short): the deconfounded arm's
   cool-down redone from where it began (its `stable.pt`), the batches drawing the favoured axes'
   types `favour_share` of the time, and that checkpoint's takes of those axes in both simulators.
+  Where that state is gone (a new machine restores only the arm's final weights), the arm's
+  constant-rate phase is trained again first (`deconfounded-stem`: the same data, seed and rates up
+  to the cool-down's start) and the cool-down branches from its last state.
 
 A run outlives its machine: on a new one, the committed results of the same out= and options are
 carried (a take is not redone while the weights, or a reference policy's exam, it was taken with
@@ -87,6 +90,7 @@ AXES: dict[str, tuple[str, str]] = {
 }
 ARMS = ("deconfounded", "confounded")
 FAVOURED = "favoured"  # the deconfounded arm with its cool-down redone favouring the axes in `favour`
+STEM = "deconfounded-stem"  # the deconfounded arm's constant-rate phase alone, retrained where its stable.pt is gone
 SIMS = ("ours", "libero")
 CANONICAL = ("libero_object", "libero_spatial", "libero_goal")
 COMMITTED = {"deconfounded": "libero-release-lora", "confounded": "libero-release-confounded-lora"}
@@ -159,10 +163,12 @@ def claim(options: ReleaseOptions, begin: bool) -> dict:
 
 
 def _stages(options: ReleaseOptions) -> dict[str, tuple[str, GenConfig]]:
-    """Stage name -> (command, config): each chosen arm's dataset and every axis's exam."""
+    """Stage name -> (command, config): each chosen arm's dataset (the deconfounded one for `favour`
+    too) and every axis's exam."""
     root, stages = Path(options.out), {}
     items = [AXES[a][0] for a in options.axes]
-    for arm in options.arms:
+    needed = [*options.arms, *(["deconfounded"] if options.favour and "deconfounded" not in options.arms else [])]
+    for arm in needed:  # the favoured cool-down trains on the deconfounded arm's data
         mixed = [f"referent=[{','.join(items)}]", f"n={options.per_type * len(items)}", f"seed={options.seed}"]
         if arm == "confounded":
             mixed.append(f"confound=[{','.join(AXES[a][1] for a in options.axes)}]")
@@ -201,35 +207,46 @@ def _trained(options: ReleaseOptions, arm: str) -> bool:
 
 def _train_config(options: ReleaseOptions, arm: str) -> tuple[TrainConfig, str]:
     """The arm's training run and its command line. The favoured arm branches from the deconfounded
-    arm's state where its cool-down began, on the same data."""
-    from train.fit import STABLE, LoraOptions, TrainConfig
+    arm's state where its cool-down began (`_branch`), on the same data; the stem is that arm's run
+    up to there, at its constant rate."""
+    from train.fit import LoraOptions, TrainConfig
 
     root = Path(options.out)
     steps = options.steps_per_axis * len(options.axes)
-    favoured = arm == FAVOURED
+    decay = int(round(steps * options.cool))
+    favoured, stem = arm == FAVOURED, arm == STEM
     cfg = TrainConfig(
-        dataset=str(root / "data" / ("deconfounded" if favoured else arm)),
+        dataset=str(root / "data" / ("deconfounded" if favoured or stem else arm)),
         out=str(root / "ckpt" / arm),
-        steps=steps,
-        decay=int(round(steps * options.cool)),
-        lr_floor=options.lr_floor,
+        steps=steps - decay if stem else steps,
+        decay=0 if stem else decay,
+        lr_floor=1.0 if stem else options.lr_floor,
         lora=LoraOptions(16),
         point_weight=options.point_weight,
         balance=options.balance,
         favour=[recorded(a) for a in options.favour] if favoured else [],
         favour_share=options.favour_share,
-        branch=str(root / "ckpt" / "deconfounded" / STABLE) if favoured else "",
+        branch=str(_branch(root)) if favoured else "",
         threads=options.threads,
         seed=options.seed,
         resume=True,
     )
     fix = f" favour=[{','.join(cfg.favour)}] favour_share={cfg.favour_share:.4g} branch={cfg.branch}" if favoured else ""
     line = (
-        f"python -m train dataset={cfg.dataset} policy=tiny lora.rank=16 steps={steps} decay={cfg.decay} "
+        f"python -m train dataset={cfg.dataset} policy=tiny lora.rank=16 steps={cfg.steps} decay={cfg.decay} "
         f"lr_floor={cfg.lr_floor} point_weight={cfg.point_weight} balance={str(cfg.balance).lower()}{fix} "
         f"threads={cfg.threads} seed={cfg.seed} out={cfg.out}"
     )
     return cfg, line
+
+
+def _branch(root: Path) -> Path:
+    """Where the favoured cool-down begins: the deconfounded arm's state at its cool-down's start
+    where this machine trained that arm, else the stem's last state (the same step and rates)."""
+    from train.fit import LAST, STABLE
+
+    kept = root / "ckpt" / "deconfounded" / STABLE
+    return kept if kept.is_file() else root / "ckpt" / STEM / LAST
 
 
 def recorded(axis: str) -> str:
@@ -254,7 +271,8 @@ def run(options: ReleaseOptions, carried: dict) -> None:
     exams: dict[str, tuple[Exam, Path]] = {}
     for name, (line, cfg) in stages.items():
         kind, what = name.split()
-        if kind == "data" and _trained(options, what) and not (what == "deconfounded" and options.favour):
+        favouring = what == "deconfounded" and options.favour and not _trained(options, FAVOURED)
+        if kind == "data" and _trained(options, what) and not favouring:
             continue  # trained on it already (here or restored): the dataset is needed again only to retrain
         commands.append(line)
         generate_once(cfg, ledger, f"generate {name}")
@@ -275,6 +293,8 @@ def run(options: ReleaseOptions, carried: dict) -> None:
         commit(trained[arm] / MODEL_FILE, Path(options.docs) / "checkpoints" / COMMITTED[arm], options.commit_mb)
         _takes(options, arm, trained[arm], exams, "ours", ledger, commands, carried)
     if options.favour:
+        if _branch(root).parent.name == STEM:
+            _train(options, STEM, ledger, commands)
         _train(options, FAVOURED, ledger, commands)
         trained[FAVOURED] = root / "ckpt" / FAVOURED
         chosen = {a: exams[a] for a in options.favour}
@@ -632,11 +652,13 @@ def plot(results: dict, path: Path) -> None:
 
 def release(options: ReleaseOptions) -> None:
     _check(options)
-    from train.fit import STABLE
+    from train.policy import MODEL_FILE
 
-    cooled_from = Path(options.out) / "ckpt" / "deconfounded" / STABLE
-    if options.train and options.favour and "deconfounded" not in options.arms and not cooled_from.is_file():
-        raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({cooled_from})")
+    arm = Path(options.out) / "ckpt" / "deconfounded"
+    committed = Path(options.docs) / "checkpoints" / COMMITTED["deconfounded"] / MODEL_FILE
+    untrained = train_log(arm) is None and not committed.is_file()
+    if options.train and options.favour and "deconfounded" not in options.arms and untrained:
+        raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({arm})")
     begun = claim(options, begin=options.train)
     carried = _carried(options)  # read before the docs are rewritten
     if carried:  # the committed checkpoints of these results: their training outlives the machine

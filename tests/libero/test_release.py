@@ -24,7 +24,9 @@ SMALL += ("threads=1", "'libero=[]'", "canonical=false", "replan=50")  # replan:
 
 
 def _release(*args: str) -> subprocess.CompletedProcess[str]:
-    argv = [a.strip("'") for a in (*SMALL, *args)]
+    """The release at SMALL's size, `args` added or replacing SMALL's of the same name."""
+    named = {a.strip("'").split("=")[0] for a in args}
+    argv = [a.strip("'") for a in (*(s for s in SMALL if s.strip("'").split("=")[0] not in named), *args)]
     return subprocess.run([sys.executable, "-m", "train.release", *argv], capture_output=True, text=True)
 
 
@@ -91,3 +93,26 @@ def test_bad_options_are_refused_in_one_line(arg: str, needle: str, tmp_path: Pa
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
     assert not (tmp_path / "r").exists() and not (tmp_path / "d").exists()
+
+
+def test_the_favoured_cool_down_on_a_new_machine_branches_from_the_retrained_stem(tmp_path: Path) -> None:
+    """The fix for a short axis redoes the deconfounded cool-down from where it began; on a machine
+    that kept only the committed weights that state is trained again (the stem), and it is the
+    state the first machine kept: the same data, seed and rates give the same weights."""
+    import torch
+
+    out, docs = tmp_path / "release", tmp_path / "docs"
+    small = ("steps_per_axis=3", "sims=[ours]", f"out={out}", f"docs={docs}")
+    done = _release("arms=[deconfounded]", *small)
+    assert done.returncode == 0, done.stderr[-3000:]
+    kept = torch.load(out / "ckpt" / "deconfounded" / "stable.pt", map_location="cpu", weights_only=False)
+    shutil.rmtree(out)  # a new machine
+    fixed = _release("arms=[]", "favour=[object]", *small)
+    assert fixed.returncode == 0, fixed.stderr[-3000:]
+    stem = torch.load(out / "ckpt" / "deconfounded-stem" / "last.pt", map_location="cpu", weights_only=False)
+    assert stem["step"] == kept["step"] == 4  # 6 steps, the last third cooled
+    assert all(torch.equal(stem["weights"][k], w) for k, w in kept["weights"].items())
+    results = json.loads((docs / "results_libero_axes.json").read_text())
+    assert results["training"]["favoured"]["branch"].endswith("deconfounded-stem/last.pt"), results["training"]
+    assert results["training"]["favoured"]["steps"] == 6
+    assert {(r["axis"], r["arm"]) for r in results["rows"] if r["arm"] == "favoured"} == {("object", "favoured")}
