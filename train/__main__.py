@@ -19,7 +19,7 @@ def validate(cfg: TrainConfig) -> None:
     for name in ("steps", "batch_size", "chunk", "threads", "log_every", "save_every"):
         if getattr(cfg, name) < 1:
             raise UserError(f"{name} must be at least 1, got {getattr(cfg, name)}")
-    for name in ("warmup", "decay", "keep_every", "aux_weight", "point_weight", "switched_first"):
+    for name in ("warmup", "decay", "keep_every", "aux_weight", "point_weight", "switched_first", "switched_before"):
         if getattr(cfg, name) < 0:
             raise UserError(f"{name} must be at least 0, got {getattr(cfg, name)}")
     if not 0 <= cfg.lr_floor <= 1:
@@ -28,8 +28,9 @@ def validate(cfg: TrainConfig) -> None:
         raise UserError(f"favour needs balance=true and favour_share in (0, 1), got {cfg.balance}, {cfg.favour_share}")
     if not 0 <= cfg.switched_share < 1:
         raise UserError(f"switched_share is a share of each batch, in [0, 1); got {cfg.switched_share}")
-    if cfg.switched_first and not cfg.switched_share:
-        raise UserError(f"switched_first={cfg.switched_first} picks the frames switched_share draws from; set switched_share too")
+    for name in ("switched_first", "switched_before"):
+        if getattr(cfg, name) and not cfg.switched_share:
+            raise UserError(f"{name}={getattr(cfg, name)} picks the frames switched_share draws from; set switched_share too")
     if cfg.branch and not Path(cfg.branch).is_file():
         raise UserError(f"branch={cfg.branch} is no training state (a run's stable.pt or last.pt)")
     if cfg.lora.rank < 1:

@@ -253,22 +253,30 @@ def switch_frames(frames: Frames) -> np.ndarray:
 
 
 def after_switch(
-    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float, first: int = 0
+    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float, first: int = 0, before: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
     """The balance groups (`groups`, or all frames one) with the switched episodes' frames from their
     switch on (`first`: only the first this many, where the hand turns) split off into a group of
     their own that takes `share` of every batch, the groups' chances (equal, or `favoured`) scaled
     to the rest: as they fall, those frames are too few (45 switched episodes of 300, their second
-    halves) to outweigh the path under way, and the turn is a few frames of each."""
+    halves) to outweigh the path under way, and the turn is a few frames of each. With `before`, the
+    last this many frames before each switch (the same states under the first name, the hand still
+    coming down) are a group of their own and the two halve `share`: weighed alone, the turn is
+    learnt as what the hand does at a grocery, whichever one is named (docs/RESULTS_FACES.md)."""
     later = after_switches(frames)
     if not later.any():
         raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
+    since = np.arange(len(frames)) - switch_frames(frames)[frames.episode]  # negative before an episode's switch
     if first:
-        later &= np.arange(len(frames)) - switch_frames(frames)[frames.episode] < first
+        later &= since < first
     base = np.zeros(len(frames), np.int64) if group is None else group
     n = int(base.max()) + 1
     prior = np.full(n, 1 / n) if chances is None else chances
-    return np.where(later, n, base), np.append(prior * (1 - share), share)
+    if not before:
+        return np.where(later, n, base), np.append(prior * (1 - share), share)
+    switched = np.isin(frames.episode, frames.episode[later])
+    leading = switched & (since < 0) & (since >= -before)
+    return np.select([later, leading], [n, n + 1], base), np.append(prior * (1 - share), [share / 2, share / 2])
 
 
 def sample(

@@ -69,6 +69,7 @@ class TrainConfig:
     favour_share: float = 0.5  # with `favour`: their share of each batch together (the other types split the rest)
     switched_share: float = 0.0  # the share of each batch drawn from switched episodes' frames after the switch (0: as they fall)
     switched_first: int = 0  # with switched_share: only each switched episode's first this many frames from its switch (0: all)
+    switched_before: int = 0  # with switched_share: its last this many frames before each switch take half that share
     branch: str = ""  # a training state of another run (its stable.pt, last.pt) this run continues from, in `out`
     out: str = "runs/train/tiny"
     policy: str = "tiny"
@@ -226,7 +227,9 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
     draw_from = data.groups(frames) if cfg.balance else None
     chances = data.favoured(frames, draw_from, cfg.favour, cfg.favour_share) if cfg.favour else None
     if cfg.switched_share:
-        draw_from, chances = data.after_switch(frames, draw_from, chances, cfg.switched_share, cfg.switched_first)
+        draw_from, chances = data.after_switch(
+            frames, draw_from, chances, cfg.switched_share, cfg.switched_first, cfg.switched_before
+        )
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)
     model.train()

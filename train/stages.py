@@ -231,9 +231,10 @@ def recipe(config: dict) -> tuple:
     """What decides a run's weights besides its data and seed: the learning rate at every step, and
     the pointer loss's weight (runs logged before `decay` or `point_weight` existed had none), the
     types a run favours with their share (none before `favour` existed), and the share of switched
-    frames (none before `switched_share` existed)."""
+    frames and which (none before `switched_share` existed)."""
     favoured = (tuple(config["favour"]), config["favour_share"]) if config.get("favour") else ()
     switched = (("switched", config["switched_share"]),) if config.get("switched_share") else ()
+    switched += tuple((k, config[k]) for k in ("switched_first", "switched_before") if config.get(k))
     return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight")) + favoured + switched
 
 

@@ -67,6 +67,15 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     assert np.array_equal(group == group.max(), turning)
     drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
     assert abs(np.mean(turning[drawn]) - 0.8) < 0.02
+    group, chances = data.after_switch(frames, None, None, 0.8, first=3, before=2)  # and the 2 frames before, halves
+    leading = np.zeros(len(frames), bool)
+    for ep, switch in zip(records.episode_index, records.switch):
+        if isinstance(switch, str):
+            step = json.loads(switch)["step"]
+            leading[frames.starts[ep] + np.arange(max(0, step - 2), step)] = True  # never the episode before
+    assert np.array_equal(group == group.max(), leading) and np.array_equal(group == group.max() - 1, turning)
+    drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
+    assert abs(np.mean(turning[drawn]) - 0.4) < 0.02 and abs(np.mean(leading[drawn]) - 0.4) < 0.02
     unswitched = replace(frames, aim=frames.episode)
     with pytest.raises(data.DatasetError, match="switched_share=0.8 needs switched episodes"):
         data.after_switch(unswitched, None, None, 0.8)

@@ -163,8 +163,9 @@ def test_datasets_it_cannot_learn_from_are_refused(
     for weight in ("point_weight", "aux_weight"):  # a negative loss weight would train away from the target
         code, lines = _refusal(capsys, f"dataset={object_dataset}", f"{weight}=-1", f"out={tmp_path / 'ckpt'}")
         assert code == 2 and len(lines) == 1 and f"{weight} must be at least 0, got -1.0" in lines[0]
-    code, lines = _refusal(capsys, f"dataset={object_dataset}", "switched_first=10", f"out={tmp_path / 'ckpt'}")
-    assert code == 2 and len(lines) == 1 and "set switched_share too" in lines[0], lines  # recorded, never applied
+    for name in ("switched_first", "switched_before"):
+        code, lines = _refusal(capsys, f"dataset={object_dataset}", f"{name}=10", f"out={tmp_path / 'ckpt'}")
+        assert code == 2 and len(lines) == 1 and "set switched_share too" in lines[0], lines  # recorded, never applied
     assert not (tmp_path / "ckpt").exists()
 
 
