@@ -102,12 +102,12 @@ def test_the_favoured_cool_down_on_a_new_machine_branches_from_the_retrained_ste
     import torch
 
     out, docs = tmp_path / "release", tmp_path / "docs"
-    small = ("steps_per_axis=3", "sims=[ours]", f"out={out}", f"docs={docs}")
-    done = _release("arms=[deconfounded]", *small)
+    small = ("steps_per_axis=3", f"out={out}", f"docs={docs}")
+    done = _release("arms=[deconfounded]", "sims=[libero]", *small)  # 'libero=[]': trained, nothing taken
     assert done.returncode == 0, done.stderr[-3000:]
     kept = torch.load(out / "ckpt" / "deconfounded" / "stable.pt", map_location="cpu", weights_only=False)
     shutil.rmtree(out)  # a new machine
-    fixed = _release("arms=[]", "favour=[object]", *small)
+    fixed = _release("arms=[]", "favour=[object]", "sims=[ours]", *small)
     assert fixed.returncode == 0, fixed.stderr[-3000:]
     stem = torch.load(out / "ckpt" / "deconfounded-stem" / "last.pt", map_location="cpu", weights_only=False)
     assert stem["step"] == kept["step"] == 4  # 6 steps, the last third cooled
