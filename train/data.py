@@ -266,7 +266,8 @@ def after_switch(
     later = after_switches(frames)
     if not later.any():
         raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
-    since = np.arange(len(frames)) - switch_frames(frames)[frames.episode]  # negative before an episode's switch
+    switched_at = switch_frames(frames)[frames.episode]  # len(frames) in an episode that never switches
+    since = np.arange(len(frames)) - switched_at  # negative before the episode's switch
     if first:
         later &= since < first
     base = np.zeros(len(frames), np.int64) if group is None else group
@@ -274,8 +275,7 @@ def after_switch(
     prior = np.full(n, 1 / n) if chances is None else chances
     if not before:
         return np.where(later, n, base), np.append(prior * (1 - share), share)
-    switched = np.isin(frames.episode, frames.episode[later])
-    leading = switched & (since < 0) & (since >= -before)
+    leading = (switched_at < len(frames)) & (since < 0) & (since >= -before)
     return np.select([later, leading], [n, n + 1], base), np.append(prior * (1 - share), [share / 2, share / 2])
 
 

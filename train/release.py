@@ -654,11 +654,11 @@ def release(options: ReleaseOptions) -> None:
     _check(options)
     from train.policy import MODEL_FILE
 
-    arm = Path(options.out) / "ckpt" / "deconfounded"
+    deconfounded = Path(options.out) / "ckpt" / "deconfounded"
     committed = Path(options.docs) / "checkpoints" / COMMITTED["deconfounded"] / MODEL_FILE
-    untrained = train_log(arm) is None and not committed.is_file()
+    untrained = train_log(deconfounded) is None and not committed.is_file()
     if options.train and options.favour and "deconfounded" not in options.arms and untrained:
-        raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({arm})")
+        raise UserError(f"favour={options.favour} redoes the deconfounded arm's cool-down: train that arm first ({deconfounded})")
     begun = claim(options, begin=options.train)
     carried = _carried(options)  # read before the docs are rewritten
     if carried:  # the committed checkpoints of these results: their training outlives the machine
