@@ -80,6 +80,12 @@ class Profile:
     def image_keys(self) -> tuple[str, ...]:
         return tuple(self.image_key(c) for c in self.cameras)
 
+    @property
+    def hand(self) -> slice:
+        """Where the state holds the hand's position (x, y, z, m, in the world frame)."""
+        start = next(i for i, name in enumerate(self.state_names) if name in ("ee_x", "eef_x"))
+        return slice(start, start + 3)
+
     def hold_action(self, home: tuple[float, ...]) -> np.ndarray:
         """The action that keeps the arm still with the gripper open (what a settle step sends):
         the home joint targets, or a zero end-effector delta."""

@@ -28,9 +28,11 @@ def validate(cfg: TrainConfig) -> None:
         raise UserError(f"favour needs balance=true and favour_share in (0, 1), got {cfg.balance}, {cfg.favour_share}")
     if not 0 <= cfg.switched_share < 1:
         raise UserError(f"switched_share is a share of each batch, in [0, 1); got {cfg.switched_share}")
-    for name in ("switched_first", "switched_before"):
+    for name in ("switched_first", "switched_before", "switched_stay"):
         if getattr(cfg, name) and not cfg.switched_share:
             raise UserError(f"{name}={getattr(cfg, name)} picks the frames switched_share draws from; set switched_share too")
+    if cfg.switched_before and cfg.switched_stay:
+        raise UserError("switched_before and switched_stay each pick the other half of switched_share; set one")
     if cfg.branch and not Path(cfg.branch).is_file():
         raise UserError(f"branch={cfg.branch} is no training state (a run's stable.pt or last.pt)")
     if cfg.lora.rank < 1:

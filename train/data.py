@@ -27,6 +27,8 @@ from core.profiles import ACTION_KEY, PROFILES, STATE_KEY, Profile
 from core.worlds import MAX_IMAGE_SIZE
 from gen.lerobot.reader import LeRobotReader
 
+REACH_BIN = 0.02  # m: how finely `reach_alike` matches the hand's distance from its target at the switches
+
 
 class DatasetError(ValueError):
     """The dataset cannot be trained on; the message says why."""
@@ -252,8 +254,22 @@ def switch_frames(frames: Frames) -> np.ndarray:
     return switched_at
 
 
+def until_grasp(frames: Frames) -> np.ndarray:
+    """Per frame, whether it comes before its episode's first closed-gripper action: while the
+    target still stands where the episode's scene put it."""
+    closing = frames.action[:, -1] > 0
+    first = np.array([s + (np.argmax(closing[s:e]) if closing[s:e].any() else e - s) for s, e in zip(frames.starts, frames.ends)])
+    return np.arange(len(frames)) < first[frames.episode]
+
+
 def after_switch(
-    frames: Frames, group: np.ndarray | None, chances: np.ndarray | None, share: float, first: int = 0, before: int = 0
+    frames: Frames,
+    group: np.ndarray | None,
+    chances: np.ndarray | None,
+    share: float,
+    first: int = 0,
+    before: int = 0,
+    stay: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The balance groups (`groups`, or all frames one) with the switched episodes' frames from their
     switch on (`first`: only the first this many, where the hand turns) split off into a group of
@@ -262,7 +278,10 @@ def after_switch(
     halves) to outweigh the path under way, and the turn is a few frames of each. With `before`, the
     last this many frames before each switch (the same states under the first name, the hand still
     coming down) are a group of their own and the two halve `share`: weighed alone, the turn is
-    learnt as what the hand does at a grocery, whichever one is named (docs/RESULTS_FACES.md)."""
+    learnt as what the hand does at a grocery, whichever one is named (docs/RESULTS_FACES.md). With
+    `stay`, that other half is the unswitched episodes' frames before their grasp at the switches'
+    reach (`reach_alike`): the states of the switches themselves under a name that stays, where the
+    frames before a switch are higher up the descent than the switch."""
     later = after_switches(frames)
     if not later.any():
         raise DatasetError(f"switched_share={share} needs switched episodes (python -m gen ... switched=<share>)")
@@ -273,10 +292,32 @@ def after_switch(
     base = np.zeros(len(frames), np.int64) if group is None else group
     n = int(base.max()) + 1
     prior = np.full(n, 1 / n) if chances is None else chances
+    if stay:
+        alike, weights = reach_alike(frames)
+        return np.select([later, alike >= 0], [n, n + 1 + alike], base), np.concatenate(
+            [prior * (1 - share), [share / 2], weights * share / 2]
+        )
     if not before:
         return np.where(later, n, base), np.append(prior * (1 - share), share)
     leading = (switched_at < len(frames)) & (since < 0) & (since >= -before)
     return np.select([later, leading], [n, n + 1], base), np.append(prior * (1 - share), [share / 2, share / 2])
+
+
+def reach_alike(frames: Frames, width: float = REACH_BIN) -> tuple[np.ndarray, np.ndarray]:
+    """The unswitched episodes' frames before their grasp, binned by how far the hand is from their
+    target (`width` m bins; -1: not such a frame), and each bin's weight: the share of the switches
+    whose hand is that far from the first target, over the bins such frames reach (a switch
+    nearer or farther than any is counted in the nearest that is)."""
+    switched_at = switch_frames(frames)
+    own = frames.target[frames.episode]  # the first target, where each episode's scene put it
+    reach = np.linalg.norm(frames.state[:, PROFILES[frames.profile].hand] - own, axis=1)
+    bins = (reach // width).astype(np.int64)
+    stays = until_grasp(frames) & (switched_at[frames.episode] == len(frames))
+    held = np.unique(bins[stays])
+    switches = bins[switched_at[switched_at < len(frames)]]
+    nearest = np.abs(held[None] - switches[:, None]).argmin(1)
+    weights = np.bincount(nearest, minlength=len(held)) / len(switches)
+    return np.where(stays, np.searchsorted(held, bins), -1), weights
 
 
 def sample(

@@ -70,6 +70,7 @@ class TrainConfig:
     switched_share: float = 0.0  # the share of each batch drawn from switched episodes' frames after the switch (0: as they fall)
     switched_first: int = 0  # with switched_share: only each switched episode's first this many frames from its switch (0: all)
     switched_before: int = 0  # with switched_share: its last this many frames before each switch take half that share
+    switched_stay: bool = False  # with switched_share: unswitched episodes' frames at the switches' reach take half that share
     branch: str = ""  # a training state of another run (its stable.pt, last.pt) this run continues from, in `out`
     out: str = "runs/train/tiny"
     policy: str = "tiny"
@@ -155,14 +156,6 @@ def pixels(frames: data.Frames, mirrored: bool) -> np.ndarray:
     return out
 
 
-def until_grasp(frames: data.Frames) -> np.ndarray:
-    """Per frame, whether it comes before its episode's first closed-gripper action: while the
-    target still stands where the episode's scene put it."""
-    closing = frames.action[:, -1] > 0
-    first = np.array([s + (np.argmax(closing[s:e]) if closing[s:e].any() else e - s) for s, e in zip(frames.starts, frames.ends)])
-    return np.arange(len(frames)) < first[frames.episode]
-
-
 def point_loss(logits: torch.Tensor, pixels: torch.Tensor, image_size: int, sigma: float = 1.0) -> torch.Tensor:
     """Cross-entropy of the pointer's map (B, h, w) against a Gaussian of `sigma` cells around
     each target pixel (B, 2: column, row in the image's pixels), per frame (B,)."""
@@ -222,13 +215,13 @@ def fit(cfg: TrainConfig, progress: bool = True) -> dict:
         if frames.target is None:
             raise data.DatasetError(f"point_weight={cfg.point_weight} needs the datasets' scene records (meta/scenes.parquet)")
         target_pixel = pixels(frames, model.config.features.mirrored)
-        reaching = until_grasp(frames)
+        reaching = data.until_grasp(frames)
     n_trainable = sum(p.numel() for p in model.parameters() if p.requires_grad)
     draw_from = data.groups(frames) if cfg.balance else None
     chances = data.favoured(frames, draw_from, cfg.favour, cfg.favour_share) if cfg.favour else None
     if cfg.switched_share:
         draw_from, chances = data.after_switch(
-            frames, draw_from, chances, cfg.switched_share, cfg.switched_first, cfg.switched_before
+            frames, draw_from, chances, cfg.switched_share, cfg.switched_first, cfg.switched_before, cfg.switched_stay
         )
     start, running = time.perf_counter(), []
     bar = tqdm(total=cfg.steps, initial=step, desc=f"train {cfg.finetune}", unit="step", disable=not progress)

@@ -25,7 +25,8 @@ Stages, each done once and reused (train/stages.py), so the run spans as many si
   `libero`; the deconfounded checkpoint on the canonical exams in LIBERO's simulator;
 * **favoured** (`favour`, the fix tried once for axes that fall short): the deconfounded arm's
   cool-down redone from where it began (its `stable.pt`), the batches drawing the favoured axes'
-  types `favour_share` of the time, and that checkpoint's takes of those axes in both simulators.
+  types `favour_share` of the time, and that checkpoint's takes in both simulators: the favoured
+  axes first, then the others (one set of weights is judged on all seven).
   Where that state is gone (a new machine restores only the arm's final weights), the arm's
   constant-rate phase is trained again first (`deconfounded-stem`: the same data, seed and rates up
   to the cool-down's start) and the cool-down branches from its last state.
@@ -296,13 +297,14 @@ def run(options: ReleaseOptions, carried: dict) -> None:
         if _branch(root).parent.name == STEM:
             _train(options, STEM, ledger, commands)
         _train(options, FAVOURED, ledger, commands)
-        trained[FAVOURED] = root / "ckpt" / FAVOURED
-        chosen = {a: exams[a] for a in options.favour}
-        _takes(options, FAVOURED, trained[FAVOURED], chosen, "ours", ledger, commands, carried)
+        weights = root / "ckpt" / FAVOURED
+        favoured = {a: exams[a] for a in options.favour}
+        for chosen in (favoured, {a: e for a, e in exams.items() if a not in favoured}):  # what it was for, first
+            for sim in SIMS:
+                _takes(options, FAVOURED, weights, chosen, sim, ledger, commands, carried)
     for arm, weights in trained.items():
-        if arm in options.libero or arm == FAVOURED:
-            chosen = {a: exams[a] for a in options.favour} if arm == FAVOURED else exams
-            _takes(options, arm, weights, chosen, "libero", ledger, commands, carried)
+        if arm in options.libero:
+            _takes(options, arm, weights, exams, "libero", ledger, commands, carried)
     if "deconfounded" in trained:
         named = {f"canonical-{world}": made for world, made in canonical.items()}
         _takes(options, "deconfounded", trained["deconfounded"], named, "libero", ledger, commands, carried, False)
@@ -462,18 +464,20 @@ def write_docs(results: dict, docs: Path) -> None:
     ]
     axis_rows = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
     if axis_rows:
+        shown = (*ARMS, *([FAVOURED] if any(r["arm"] == FAVOURED for r in results["rows"]) else []))
         lines += [
             "",
             "## Obeyed name, per axis",
             "",
             "A swap row changes one word; *obeyed* is the hand within 5 cm of what the new word names.",
             "",
-            "| axis | deconfounded, libero | deconfounded, ours | confounded, libero | confounded, ours "
-            "| `position` (ours) | `named_place` (ours) | chance |",
-            "|---|---|---|---|---|---|---|---|",
+            "| axis | "
+            + " | ".join(f"{arm}, {sim}" for arm in shown for sim in ("libero", "ours"))
+            + " | `position` (ours) | `named_place` (ours) | chance |",
+            "|---|---|---|---|" + "---|---|" * len(shown),
         ]
         for axis in axis_rows:
-            cells = [_face(_find(results, axis, arm, sim), "obeyed_name") for arm in ARMS for sim in ("libero", "ours")]
+            cells = [_face(_find(results, axis, arm, sim), "obeyed_name") for arm in shown for sim in ("libero", "ours")]
             ours = _find(results, axis, "deconfounded", "ours") or _find(results, axis, "confounded", "ours")
             position = cell(ours["position"]["obeyed_name"]) if ours and ours.get("position") else "—"
             named = _face(_find(results, axis, "named_place", "ours"), "obeyed_name")
@@ -524,7 +528,7 @@ def write_docs(results: dict, docs: Path) -> None:
     missing = list(results["not_run"]) + [
         f"{arm} on {axis} ({sim})"
         for arm, t in results["training"].items()
-        for axis in t.get("favour", s["axes"])
+        for axis in s["axes"]
         for sim in ("ours", *(["libero"] if arm in results["libero_arms"] or arm == FAVOURED else []))
         if not _find(results, axis, arm, sim)
     ]

@@ -234,7 +234,7 @@ def recipe(config: dict) -> tuple:
     frames and which (none before `switched_share` existed)."""
     favoured = (tuple(config["favour"]), config["favour_share"]) if config.get("favour") else ()
     switched = (("switched", config["switched_share"]),) if config.get("switched_share") else ()
-    switched += tuple((k, config[k]) for k in ("switched_first", "switched_before") if config.get(k))
+    switched += tuple((k, config[k]) for k in ("switched_first", "switched_before", "switched_stay") if config.get(k))
     return tuple(config.get(k, 0) for k in ("steps", "lr", "warmup", "lr_floor", "decay", "point_weight")) + favoured + switched
 
 

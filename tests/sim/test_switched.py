@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from ledataset.datasets.lerobot_dataset import LeRobotDataset
 
+from core.profiles import PROFILES
 from core.spec import EpisodeSpec
 from gen.products import scenes
 from gen.verify import verify
@@ -76,6 +77,17 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     assert np.array_equal(group == group.max(), leading) and np.array_equal(group == group.max() - 1, turning)
     drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
     assert abs(np.mean(turning[drawn]) - 0.4) < 0.02 and abs(np.mean(leading[drawn]) - 0.4) < 0.02
+    group, chances = data.after_switch(frames, None, None, 0.8, first=3, stay=True)  # or unswitched frames, as near
+    stays = ~np.isin(frames.episode, [ep for ep, sw in zip(records.episode_index, records.switch) if isinstance(sw, str)])
+    stays &= data.until_grasp(frames)  # an unswitched episode's frames before its grasp
+    assert np.array_equal(group == 1, turning) and np.array_equal(group > 1, stays)
+    drawn = data.sample(frames, np.random.default_rng(0), 8000, True, group, chances)
+    assert abs(np.mean(turning[drawn]) - 0.4) < 0.02 and abs(np.mean(stays[drawn]) - 0.4) < 0.02
+    reach = np.linalg.norm(frames.state[:, PROFILES[frames.profile].hand] - frames.target[frames.episode], axis=1)
+    bins, at = reach // data.REACH_BIN, data.switch_frames(frames)
+    held = np.unique(bins[stays])
+    nearest = {held[np.abs(held - b).argmin()] for b in bins[at[at < len(frames)]]}
+    assert set(bins[drawn[stays[drawn]]]) == nearest  # as near their target as the switches' hands are to theirs
     unswitched = replace(frames, aim=frames.episode)
     with pytest.raises(data.DatasetError, match="switched_share=0.8 needs switched episodes"):
         data.after_switch(unswitched, None, None, 0.8)

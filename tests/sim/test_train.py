@@ -27,7 +27,7 @@ from gen.lerobot.video import encode_episode
 from gen.lerobot.writer import Episode, LeRobotWriter, Recording
 from helpers import ONE_TRIAL_64, Shared, make_dataset
 from jobs.cli import UserError, main
-from train.fit import STABLE, TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file, until_grasp
+from train.fit import STABLE, TrainConfig, _shift, fit, kept_steps, point_loss, schedule, snapshot_file
 from train.stages import TIMINGS, Ledger, made
 
 
@@ -163,9 +163,12 @@ def test_datasets_it_cannot_learn_from_are_refused(
     for weight in ("point_weight", "aux_weight"):  # a negative loss weight would train away from the target
         code, lines = _refusal(capsys, f"dataset={object_dataset}", f"{weight}=-1", f"out={tmp_path / 'ckpt'}")
         assert code == 2 and len(lines) == 1 and f"{weight} must be at least 0, got -1.0" in lines[0]
-    for name in ("switched_first", "switched_before"):
-        code, lines = _refusal(capsys, f"dataset={object_dataset}", f"{name}=10", f"out={tmp_path / 'ckpt'}")
+    for picked in ("switched_first=10", "switched_before=10", "switched_stay=true"):
+        code, lines = _refusal(capsys, f"dataset={object_dataset}", picked, f"out={tmp_path / 'ckpt'}")
         assert code == 2 and len(lines) == 1 and "set switched_share too" in lines[0], lines  # recorded, never applied
+    both = ("switched_share=0.5", "switched_before=10", "switched_stay=true")
+    code, lines = _refusal(capsys, f"dataset={object_dataset}", *both, f"out={tmp_path / 'ckpt'}")
+    assert code == 2 and len(lines) == 1 and "set one" in lines[0], lines
     assert not (tmp_path / "ckpt").exists()
 
 
@@ -175,7 +178,7 @@ def test_the_pointer_is_taught_where_the_target_is_until_the_grasp(object_datase
     from train import data
 
     frames = data.load(str(object_dataset))
-    reaching = until_grasp(frames)
+    reaching = data.until_grasp(frames)
     for start, end in zip(frames.starts, frames.ends):
         first = start + int(np.argmin(reaching[start:end]))
         assert reaching[start] and not reaching[end - 1] and frames.action[first, -1] > 0
