@@ -97,6 +97,11 @@ def validate(cfg: GenConfig) -> None:
     if not isinstance(cfg.referent, str):
         _validate_mix(cfg)
         return
+    if mix.WORLD_SEPARATOR in cfg.referent:  # `color@libero_spatial`, as a list names it: `world=` said another way
+        name, world = mix.split(cfg.referent)
+        if cfg.world not in (None, world):
+            raise UserError(f"referent={cfg.referent} names world {world} and world={cfg.world} another: give one")
+        cfg.referent, cfg.world = name, world
     if cfg.confound is not None and not isinstance(cfg.confound, (str, list)):
         raise UserError(f"confound must name a shortcut (position, layout), or one per type of a list, got {cfg.confound!r}")
     if cfg.confound is not None and not isinstance(cfg.confound, str):

@@ -51,6 +51,8 @@ def _untouched(out: Path) -> bool:
         (["holdout=[milk carton,soda can,bottle,bread,cereal box,lemon]"], "holdout: holds out every object"),
         (["referent=libero_object", "profile=native"], "world libero_object is recorded in profile libero only"),
         (["referent=color", "world=libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
+        (["referent=color@libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
+        (["referent=color@libero_goal", "world=libero_spatial"], "names world libero_goal and world=libero_spatial another"),
         (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
         (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
         (["switched=1.5"], "switched= is the share of episodes that change course, in [0, 1], got 1.5"),
@@ -311,6 +313,17 @@ def test_a_list_option_takes_a_bare_value_as_a_one_item_list(tmp_path: Path) -> 
     from jobs.cli import parse
 
     assert parse("python -m eval.suites", SuitesOptions, ["policy=position", "suites=all"]).suites == ["all"]
+
+
+def test_a_type_names_its_world_alone_as_in_a_list(tmp_path: Path) -> None:
+    """`referent=color@libero_spatial`, as the README's mix names a type, is `referent=color world=libero_spatial`."""
+    made = {}
+    for how, args in (("at", ["referent=color@libero_spatial"]), ("world", ["referent=color", "world=libero_spatial"])):
+        result = run_gen(*args, "n=6", "plan_only=true", f"out={tmp_path / how}")
+        assert result.returncode == 0, result.stderr
+        config = json.loads((tmp_path / how / "meta/generation.json").read_text())["config"]
+        made[how] = {k: v for k, v in config.items() if k != "out"}
+    assert made["at"] == made["world"] and made["at"]["world"] == "libero_spatial"
 
 
 def test_a_missing_spec_file_is_named_as_missing(tmp_path: Path) -> None:
