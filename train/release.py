@@ -617,8 +617,8 @@ def _face(row: dict | None, face: str) -> str:
 
 
 def plot(results: dict, path: Path) -> None:
-    """Obeyed name per axis for both arms (LIBERO's simulator where taken there, else ours,
-    hatched), chance dotted and the `position` shortcut as a cross."""
+    """Obeyed name per axis for both arms and the favoured checkpoint where it was taken (LIBERO's
+    simulator where taken there, else ours, hatched), chance dotted and the `position` shortcut as a cross."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -627,9 +627,13 @@ def plot(results: dict, path: Path) -> None:
 
     axes = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
     x = np.arange(len(axes))
-    fig, ax = plt.subplots(figsize=(1.3 * len(axes) + 2, 4))
+    fig, ax = plt.subplots(figsize=(1.3 * len(axes) + 4, 4))
     labelled: set[str] = set()
-    for offset, arm, color in ((-0.2, "deconfounded", "tab:blue"), (0.2, "confounded", "tab:orange")):
+    drawn = [(arm, color) for arm, color in zip((*ARMS, FAVOURED), ("tab:blue", "tab:orange", "tab:green"))
+             if arm != FAVOURED or any(r["arm"] == FAVOURED for r in results["rows"])]  # fmt: skip
+    width = 0.76 / len(drawn)
+    for k, (arm, color) in enumerate(drawn):
+        offset = (k - (len(drawn) - 1) / 2) * width
         for i, axis in enumerate(axes):
             row = _find(results, axis, arm, "libero") or _find(results, axis, arm, "ours")
             if row is None:
@@ -638,7 +642,7 @@ def plot(results: dict, path: Path) -> None:
             lo, hi = face.get("ci_trials") or face["ci"]
             label = f"{arm} (hatched: in ours)" if arm not in labelled else None
             labelled.add(arm)
-            ax.bar(i + offset, face["rate"], 0.38, color=color, hatch="" if row["sim"] == "libero" else "//",
+            ax.bar(i + offset, face["rate"], width, color=color, hatch="" if row["sim"] == "libero" else "//",
                    yerr=[[face["rate"] - lo], [hi - face["rate"]]], capsize=3, label=label)  # fmt: skip
     for i, axis in enumerate(axes):
         row = next(r for r in results["rows"] if r["axis"] == axis and r["exam"] == "axis")
@@ -648,7 +652,7 @@ def plot(results: dict, path: Path) -> None:
             ax.plot(i, ours["position"]["obeyed_name"]["rate"], "kx", markersize=9, label="position shortcut" if i == 0 else None)
     ax.set_xticks(x, axes)
     ax.set(ylabel="obeyed name (5 cm)", ylim=(0, 1.05), title="Held-out exams; dotted: chance")
-    ax.legend(fontsize=8, loc="upper right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1))  # beside the bars, never over one
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
