@@ -464,7 +464,7 @@ def write_docs(results: dict, docs: Path) -> None:
     ]
     axis_rows = [a for a in AXES if any(r["axis"] == a and r["exam"] == "axis" for r in results["rows"])]
     if axis_rows:
-        shown = (*ARMS, *([FAVOURED] if any(r["arm"] == FAVOURED for r in results["rows"]) else []))
+        shown = _arms_taken(results)
         lines += [
             "",
             "## Obeyed name, per axis",
@@ -616,6 +616,12 @@ def _face(row: dict | None, face: str) -> str:
     return cell(row["faces"][face]) if row and face in row["faces"] else "—"
 
 
+def _arms_taken(results: dict) -> tuple[str, ...]:
+    """The columns of the per-axis table and the bars of its picture: both arms, and the favoured
+    checkpoint once it has taken an exam."""
+    return (*ARMS, *([FAVOURED] if any(r["arm"] == FAVOURED for r in results["rows"]) else []))
+
+
 def plot(results: dict, path: Path) -> None:
     """Obeyed name per axis for both arms and the favoured checkpoint where it was taken (LIBERO's
     simulator where taken there, else ours, hatched), chance dotted and the `position` shortcut as a cross."""
@@ -629,8 +635,8 @@ def plot(results: dict, path: Path) -> None:
     x = np.arange(len(axes))
     fig, ax = plt.subplots(figsize=(1.3 * len(axes) + 4, 4))
     labelled: set[str] = set()
-    drawn = [(arm, color) for arm, color in zip((*ARMS, FAVOURED), ("tab:blue", "tab:orange", "tab:green"))
-             if arm != FAVOURED or any(r["arm"] == FAVOURED for r in results["rows"])]  # fmt: skip
+    colors = {"deconfounded": "tab:blue", "confounded": "tab:orange", FAVOURED: "tab:green"}
+    drawn = [(arm, colors[arm]) for arm in _arms_taken(results)]
     width = 0.76 / len(drawn)
     for k, (arm, color) in enumerate(drawn):
         offset = (k - (len(drawn) - 1) / 2) * width
