@@ -102,3 +102,15 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     assert "2 switched episodes" in probed.stdout and [r.split("|")[2].strip() for r in rows] == ["switch+0", "switch+5"]
     refused = subprocess.run([*probe, f"policies=[{ckpt}]"], capture_output=True, text=True)
     assert refused.returncode == 2 and len(refused.stderr.strip().splitlines()) == 1, refused.stderr
+    turned = tmp_path / "turns"  # train/turns.py: the oracle's turn from a policy's own state (the oracle policy's here)
+    turns = [sys.executable, "-m", "train.turns", "policy=oracle", f"out={turned}", "later=[0]"]
+    made = subprocess.run([*turns, f"dataset={root}"], capture_output=True, text=True)
+    assert made.returncode == 0 and "wrote 2 turns from 2 switched scenes" in made.stdout, made.stderr[-2000:]
+    records, ds = scenes.read(turned).sort_values("episode_index"), LeRobotDataset("local/turns", root=turned)
+    for ep, instruction, switch in zip(records.episode_index, records.instruction, records.switch):
+        start, then = ds.meta.episodes[ep]["dataset_from_index"], json.loads(switch)
+        assert then["step"] == 1 and ds[start]["task"] == instruction and ds[start + 1]["task"] == then["instruction"]
+    union = data.load([str(root), str(turned)])  # a union's switches are each part's, where they are
+    assert np.array_equal(data.after_switches(union), np.concatenate([moved, data.after_switches(data.load(turned))]))
+    refused = subprocess.run([*turns, f"dataset={tmp_path / 'none'}"], capture_output=True, text=True)
+    assert refused.returncode == 2 and "is no finished generated dataset" in refused.stderr, refused.stderr
