@@ -24,8 +24,11 @@ WORLD_SEPARATOR = "@"
 
 
 def split(item: str) -> tuple[str, str | None]:
-    """A list item as (type, its world or None): `color@libero_spatial`, or `color`."""
-    name, _, world = item.partition(WORLD_SEPARATOR)
+    """A list item as (type, its world or None): `color@libero_spatial`, or `color`; `color@`, a
+    separator naming no world, is refused (it would read as the type's own world)."""
+    name, at, world = item.partition(WORLD_SEPARATOR)
+    if at and not world:
+        raise UserError(f"referent={item} names no world after {WORLD_SEPARATOR!r}: write {item}<world>, or {name} for its own")
     return name, world or None
 
 

@@ -53,6 +53,8 @@ def _untouched(out: Path) -> bool:
         (["referent=color", "world=libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
         (["referent=color@libero_goal"], "referent color has no design in world libero_goal; worlds that carry"),
         (["referent=color@libero_goal", "world=libero_spatial"], "names world libero_goal and world=libero_spatial another"),
+        (["referent=color@"], "referent=color@ names no world after '@': write color@<world>, or color for its own"),
+        (["referent=[color@libero_spatial,object@]"], "referent=object@ names no world after '@'"),
         (["referent=libero_object", "holdout=[nutella]"], "'nutella' names no object of this referent"),
         (["referent=libero_object", "targets=[milk,pizza]"], "'pizza' names no object of this referent"),
         (["switched=1.5"], "switched= is the share of episodes that change course, in [0, 1], got 1.5"),
