@@ -15,8 +15,11 @@ with `later`, that many chunks beyond — and the oracle, replanning from that v
 Each such course the oracle finishes is one episode: the policy's last action before the switch
 (first instruction), then the oracle's (second instruction from frame 1), recorded as a switched
 episode (meta/scenes.parquet `switch`), so `python -m train dataset=[<set>,<this>] switched_share=…`
-draws its turns as it draws the set's. A DAgger step (Ross et al. 2011) on the switch alone: the
-states the policy visits, the oracle's actions from them.
+draws its turns as it draws the set's. With `after`, the policy also goes on that many chunks under
+the second instruction, as it does in the exam, and the oracle takes over from where that leaves
+it (hovering between the two groceries, say): an episode of the second ask alone, begun in that
+state, every action in it the oracle's. A DAgger step (Ross et al. 2011) on the switch: the states
+the policy visits, the oracle's actions from them.
 
 Resumable (`resume=true`): each episode is kept as it is made (jobs/partial.py), the set appears at
 `out` in one rename once all are made.
@@ -52,7 +55,8 @@ class TurnsOptions:
     dataset: str = "???"  # a switched set (gen ... switched=<share>): its switched episodes' scenes and second asks
     out: str = "???"
     replan: int | None = None  # a chunking policy's actions executed per predicted chunk, as the exam takes it; default its own
-    later: list[int] = field(default_factory=lambda: [0, 1])  # chunks after the exam's switch at which a turn begins
+    later: list[int] = field(default_factory=lambda: [0, 1])  # chunks after the exam's switch at which the switch comes
+    after: list[int] = field(default_factory=lambda: [0])  # chunks the policy acts under the second instruction before the oracle
     n: int = 0  # the first this many switched scenes (0: all)
     resume: bool = False
     overwrite: bool = False
@@ -76,47 +80,44 @@ class Turner:
         self.producer = Producer(self.referent, spec.setup)
 
     def turns(self, spec: EpisodeSpec) -> list[Produced | str]:
-        """Per `later`, the episode that turns there, or why there is none."""
-        p, settle = self.producer, spec.setup.interface.settle_steps
-        first = replace(spec, switch=None)
+        """Per `later` and `after`, the episode that turns there, or why there is none."""
+        p, settle, asked = self.producer, spec.setup.interface.settle_steps, len(self.options.later) * len(self.options.after)
+        first, then = replace(spec, switch=None), spec.after_switch()
         oracle = demonstrate(p.scene, p.ik, first, self.referent.demo, None, settle)
         if not oracle.success:
-            return [f"the oracle does not finish the first ask ({oracle.failure})"] * len(self.options.later)
+            return [f"the oracle does not finish the first ask ({oracle.failure})"] * asked
         step = approach_step(p.scene, oracle, SWITCH_DISTANCE)
         if not step:
-            return ["no approach to switch in"] * len(self.options.later)
-        reads = [read_at(step, self.replan, later) for later in self.options.later]
-        actions, states = self._rollout(first, settle, max(reads))
+            return ["no approach to switch in"] * asked
         made: list[Produced | str] = []
-        for at in reads:
-            then = demonstrate(p.scene, p.ik, spec.after_switch(), self.referent.demo, None, settle, actions[:at])
-            if not then.success:
-                made.append(f"from the policy's state at step {at} the oracle fails ({then.failure})")
-                continue
-            demo = Demo(
-                spec,
-                np.concatenate([actions[at - 1 : at], then.actions]),
-                np.concatenate([states[at - 1 : at], then.states]),
-                then.outcome,
-                True,
-                switch_step=1,
-            )
-            made.append(p.record(demo, []))
+        for later in self.options.later:
+            switched = read_at(step, self.replan, later)
+            takeovers = [switched + after * self.replan for after in self.options.after]
+            actions, states = self._rollout(first, then.instruction, settle, switched, max(takeovers))
+            for at in takeovers:
+                course = demonstrate(p.scene, p.ik, then, self.referent.demo, None, settle, actions[:at])
+                if not course.success:
+                    made.append(f"from the policy's state at step {at} the oracle fails ({course.failure})")
+                elif at == switched:  # the switch itself: the policy's last action under the first name, then the turn
+                    made.append(p.record(_joined(spec, actions[at - 1 : at], states[at - 1 : at], course), []))
+                else:  # the policy went on under the second name: from there, the oracle's course alone
+                    made.append(p.record(course, []))
         return made
 
-    def _rollout(self, spec: EpisodeSpec, settle: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """The policy's first `steps` actions under `spec`'s instruction from its scene after
-        `settle` held steps, and the physics state before each."""
+    def _rollout(self, spec: EpisodeSpec, then: str, settle: int, switched: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """The policy's first `steps` actions from `spec`'s scene after `settle` held steps, shown
+        `spec`'s instruction and from step `switched` on `then`, and the physics state before each."""
         scene, cameras = self.producer.scene, self.producer.cameras
         scene.reset(spec)
         for _ in range(settle):
             scene.step(spec.setup.interface.hold_action(spec.setup.robot_home))
         self.policy.reset(Context(spec, spec.instruction, spec.target, spec.task.program, spec.seed))
         actions, states = [], []
-        for _ in range(steps):
+        for t in range(steps):
             states.append(scene.physics_state())
             reads = getattr(self.policy, "wants_observation", lambda: True)()
-            action = np.asarray(self.policy.act(observe(scene, cameras if reads else None, spec.instruction, False)), np.float32)
+            shown = spec.instruction if t < switched else then
+            action = np.asarray(self.policy.act(observe(scene, cameras if reads else None, shown, False)), np.float32)
             scene.step(action)
             actions.append(action)
         return np.asarray(actions), np.asarray(states)
@@ -125,12 +126,27 @@ class Turner:
         self.producer.close()
 
 
+def _joined(spec: EpisodeSpec, actions: np.ndarray, states: np.ndarray, course: Demo) -> Demo:
+    """`spec`'s switched episode: `actions` (and the `states` before them) under its first
+    instruction, then the oracle's `course` under the second."""
+    return Demo(
+        spec,
+        np.concatenate([actions, course.actions]),
+        np.concatenate([states, course.states]),
+        course.outcome,
+        course.success,
+        switch_step=len(actions),
+    )
+
+
 def _check(options: TurnsOptions) -> list[EpisodeSpec]:
     """The source set's switched episodes, or one line saying why there are none to turn."""
     if options.replan is not None and options.replan < 1:
         raise UserError(f"replan must be at least 1, got {options.replan}")
-    if not options.later or min(options.later) < 0 or len(set(options.later)) != len(options.later):
-        raise UserError(f"later must be distinct chunk counts >= 0, got {options.later}")
+    for name in ("later", "after"):
+        counts = getattr(options, name)
+        if not counts or min(counts) < 0 or len(set(counts)) != len(counts):
+            raise UserError(f"{name} must be distinct chunk counts >= 0, got {counts}")
     root = Path(options.dataset)
     if completed(root) is None or not (root / SCENES_PATH).is_file():
         raise UserError(f"dataset={root} is no finished generated dataset (python -m gen ... switched=<share>)")
@@ -186,7 +202,7 @@ def run(options: TurnsOptions) -> None:
             "config": record,
             "complete": True,
             "episodes": len(rows),
-            "switched_episodes": len(rows),
+            "switched_episodes": sum(isinstance(row["switch"], str) for row in rows),
             "failed": len(failures),
             "seconds": round(seconds, 2),
         }
