@@ -51,15 +51,15 @@ from referents import registry as referents
 
 @dataclass
 class TurnsOptions:
-    policy: str = "???"  # the checkpoint whose states the turns begin from (ckpt:<folder>)
-    dataset: str = "???"  # a switched set (gen ... switched=<share>): its switched episodes' scenes and second asks
-    out: str = "???"
+    policy: str  # the checkpoint whose states the turns begin from (ckpt:<folder>)
+    dataset: str  # a switched set (gen ... switched=<share>): its switched episodes' scenes and second asks
+    out: str  # the set of turns it writes
     replan: int | None = None  # a chunking policy's actions executed per predicted chunk, as the exam takes it; default its own
     later: list[int] = field(default_factory=lambda: [0, 1])  # chunks after the exam's switch at which the switch comes
     after: list[int] = field(default_factory=lambda: [0])  # chunks the policy acts under the second instruction before the oracle
     n: int = 0  # the first this many switched scenes (0: all)
-    resume: bool = False
-    overwrite: bool = False
+    resume: bool = False  # continue an interrupted run with the same options
+    overwrite: bool = False  # discard an interrupted run's episodes and begin again
 
 
 def read_at(step: int, replan: int, later: int) -> int:
