@@ -135,7 +135,7 @@ def change_course(
     if asked.brings and asked.moved(then, then.target) == held:
         carried = carry_step(scene, first, held, CARRIED)
         if carried is not None:
-            demo = _joined(first, carried, demonstrate(scene, ik, then, script, state, settle, first.actions[:carried], held))
+            demo = joined(first, carried, demonstrate(scene, ik, then, script, state, settle, first.actions[:carried], held))
             if demo.success:
                 return replace(demo, spec=spec)
     to_hold = _to_hold(scene, first)
@@ -145,7 +145,7 @@ def change_course(
         return replace(first, spec=spec, success=False, failure=f"no approach to change course in ({why})")
     latest = max(step, _first_within(to_hold, LATEST) or step)
     for at in dict.fromkeys((along(spec, latest, step), step)):  # the drawn step, else the exam's
-        demo = _joined(first, at, demonstrate(scene, ik, then, script, state, settle, first.actions[:at]))
+        demo = joined(first, at, demonstrate(scene, ik, then, script, state, settle, first.actions[:at]))
         if demo.success:
             break
     return replace(demo, spec=spec)
@@ -166,7 +166,7 @@ def along(spec: EpisodeSpec, latest: int, descent: int) -> int:
     return int(rng.integers(first, latest + 1))
 
 
-def _joined(first: Demo, step: int, then: Demo) -> Demo:
+def joined(first: Demo, step: int, then: Demo) -> Demo:
     """`first`'s actions before `step`, then `then`'s: judged as `then` is."""
     return Demo(
         then.spec,

@@ -241,11 +241,16 @@ def favoured(frames: Frames, group: np.ndarray, types: list[str], share: float) 
     return np.where(chosen, share / chosen.sum(), (1 - share) / (~chosen).sum())
 
 
+def first_aims(frames: Frames) -> np.ndarray:
+    """(N,) the row of `target` each frame's episode names first: a switch comes after an episode's
+    first frame, and in a union of datasets these rows are not the episodes' numbers."""
+    assert frames.aim is not None, "aims need the datasets' scene records"
+    return frames.aim[frames.starts[frames.episode]]
+
+
 def after_switches(frames: Frames) -> np.ndarray:
     """(N,) whether each frame comes after its episode's switch (its instruction names the second target)."""
-    if frames.aim is None:
-        return np.zeros(len(frames), bool)
-    return frames.aim != frames.aim[frames.starts[frames.episode]]  # a switch comes after an episode's first frame
+    return frames.aim != first_aims(frames) if frames.aim is not None else np.zeros(len(frames), bool)
 
 
 def switch_frames(frames: Frames) -> np.ndarray:
@@ -311,7 +316,7 @@ def reach_alike(frames: Frames, width: float = REACH_BIN) -> tuple[np.ndarray, n
     whose hand is that far from the first target, over the bins such frames reach (a switch
     nearer or farther than any is counted in the nearest that is)."""
     switched_at = switch_frames(frames)
-    own = frames.target[frames.aim[frames.starts[frames.episode]]]  # the first target, where each episode's scene put it
+    own = frames.target[first_aims(frames)]  # the first target, where each episode's scene put it
     reach = np.linalg.norm(frames.state[:, PROFILES[frames.profile].hand] - own, axis=1)
     bins = (reach // width).astype(np.int64)
     stays = until_grasp(frames) & (switched_at[frames.episode] == len(frames))

@@ -45,7 +45,7 @@ from gen.products import scenes
 from gen.products.produce import Produced, Producer
 from jobs.cli import UserError, main
 from jobs.partial import Partial, completed
-from oracle.episode import Demo, approach_step, demonstrate
+from oracle.episode import Demo, approach_step, demonstrate, joined
 from referents import registry as referents
 
 
@@ -99,7 +99,8 @@ class Turner:
                 if not course.success:
                     made.append(f"from the policy's state at step {at} the oracle fails ({course.failure})")
                 elif at == switched:  # the switch itself: the policy's last action under the first name, then the turn
-                    made.append(p.record(_joined(spec, actions[at - 1 : at], states[at - 1 : at], course), []))
+                    last = Demo(spec, actions[at - 1 : at], states[at - 1 : at], None, True)
+                    made.append(p.record(replace(joined(last, 1, course), spec=spec), []))
                 else:  # the policy went on under the second name: from there, the oracle's course alone
                     made.append(p.record(course, []))
         return made
@@ -124,19 +125,6 @@ class Turner:
 
     def close(self) -> None:
         self.producer.close()
-
-
-def _joined(spec: EpisodeSpec, actions: np.ndarray, states: np.ndarray, course: Demo) -> Demo:
-    """`spec`'s switched episode: `actions` (and the `states` before them) under its first
-    instruction, then the oracle's `course` under the second."""
-    return Demo(
-        spec,
-        np.concatenate([actions, course.actions]),
-        np.concatenate([states, course.states]),
-        course.outcome,
-        course.success,
-        switch_step=len(actions),
-    )
 
 
 def _check(options: TurnsOptions) -> list[EpisodeSpec]:
