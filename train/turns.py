@@ -22,7 +22,8 @@ state, every action in it the oracle's. A DAgger step (Ross et al. 2011) on the 
 the policy visits, the oracle's actions from them.
 
 Resumable (`resume=true`): each episode is kept as it is made (jobs/partial.py), the set appears at
-`out` in one rename once all are made.
+`out` in one rename once all are made, and the same command on a finished set does nothing. `out`
+is never a folder of someone else's files; `overwrite=true` replaces only a set this project wrote.
 """
 
 from __future__ import annotations
@@ -44,9 +45,12 @@ from gen.lerobot.writer import LeRobotWriter, Recording
 from gen.products import scenes
 from gen.products.produce import Produced, Producer
 from jobs.cli import UserError, main
+from jobs.output import check_output
 from jobs.partial import Partial, completed
 from oracle.episode import Demo, approach_step, demonstrate, joined
 from referents import registry as referents
+
+MADE_BY = "python -m train.turns"  # meta/generation.json: which command wrote the set
 
 
 @dataclass
@@ -155,6 +159,13 @@ def run(options: TurnsOptions) -> None:
     specs = _check(options)
     out, started = Path(options.out), time.perf_counter()
     record = {k: v for k, v in asdict(options).items() if k not in ("out", "resume", "overwrite")}
+    finished = completed(out) if options.resume and not options.overwrite else None
+    if finished is not None:  # the same command again: the set is there, nothing is redone or replaced
+        if finished.get("made_by") != MADE_BY or finished.get("config") != json.loads(json.dumps(record)):
+            raise UserError(f"resume=true, but out={out} holds a finished set made otherwise; pass overwrite=true to replace it")
+        print(f"{out} is already complete ({finished['episodes']} episodes, same options); nothing to do")
+        return
+    check_output(out, options.overwrite)  # never a folder of someone else's files
     try:
         turner = Turner(options, specs[0])  # a policy that cannot be made is refused before anything is written
     except PolicyError as exc:
@@ -186,7 +197,8 @@ def run(options: TurnsOptions) -> None:
         scenes.write(root, rows)
         seconds = time.perf_counter() - started
         generation = {
-            "generator": "deconfound train.turns",
+            "generator": "deconfound",  # a dataset this project wrote (jobs/output.py): overwrite=true may replace it
+            "made_by": MADE_BY,
             "config": record,
             "complete": True,
             "episodes": len(rows),

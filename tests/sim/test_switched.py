@@ -103,7 +103,8 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     refused = subprocess.run([*probe, f"policies=[{ckpt}]"], capture_output=True, text=True)
     assert refused.returncode == 2 and len(refused.stderr.strip().splitlines()) == 1, refused.stderr
     turned = tmp_path / "turns"  # train/turns.py: the oracle's turn from a policy's own state (the oracle policy's here)
-    turns = [sys.executable, "-m", "train.turns", "policy=oracle", f"out={turned}", "later=[0]", "after=[0,1]"]
+    command = [sys.executable, "-m", "train.turns", "policy=oracle", "later=[0]", "after=[0,1]"]
+    turns = [*command, f"out={turned}"]
     made = subprocess.run([*turns, f"dataset={root}"], capture_output=True, text=True)
     assert made.returncode == 0 and "wrote 4 turns from 2 switched scenes" in made.stdout, made.stderr[-2000:]
     records, ds = scenes.read(turned).sort_values("episode_index"), LeRobotDataset("local/turns", root=turned)
@@ -119,3 +120,12 @@ def test_switched_episodes_change_task_where_the_record_says(tmp_path: Path) -> 
     assert np.array_equal(data.after_switches(union), np.concatenate([moved, data.after_switches(data.load(turned))]))
     refused = subprocess.run([*turns, f"dataset={tmp_path / 'none'}"], capture_output=True, text=True)
     assert refused.returncode == 2 and "is no finished generated dataset" in refused.stderr, refused.stderr
+    again = subprocess.run([*turns, f"dataset={root}", "resume=true"], capture_output=True, text=True)
+    assert again.returncode == 0 and "already complete (4 episodes, same options)" in again.stdout, again.stderr[-2000:]
+    mine = tmp_path / "mine"  # a folder of the user's: never written into, nor replaced
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    for extra in ([], ["overwrite=true"]):
+        kept = subprocess.run([*command, f"out={mine}", f"dataset={root}", *extra], capture_output=True, text=True)
+        assert kept.returncode == 2 and len(kept.stderr.strip().splitlines()) == 1, kept.stderr
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
