@@ -23,12 +23,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import oracle  # noqa: F401  (headless-rendering defaults before mujoco loads)
-from core import libero, worlds
+from core import libero
 from core.exam import read
 from core.spec import FAST
 from eval.policies import FeatureMismatch, PolicyError
 from eval.policies.registry import make
-from gen.products.canonical import CanonicalOptions, build, suite_of
+from gen.products.canonical import CanonicalOptions, build, suites_of, world_suite
 from jobs.cli import UserError, main
 
 FACES = ("task", "obeyed_name", "true_target", "occ", "nonsense", "switch_obeyed")
@@ -39,7 +39,7 @@ PICTURE = "suites.png"
 class SuitesOptions:
     policy: str  # oracle, position, named_place, nothing, random, remote:HOST:PORT, lerobot:PATH, ckpt:PATH (eval/policies/)
     suites: list[str] = field(default_factory=lambda: ["all"])  # suite names, or [all]: every covered suite of `world`
-    world: str = "libero_object"  # the LIBERO world whose suites `all` means
+    world: str = "libero_object"  # the LIBERO world whose suites `all` means (libero_10: LIBERO-10's, across its worlds)
     states: int = 5  # LIBERO's initial states per task in each exam (drawn with seed)
     tasks: int | None = None  # only each suite's first this many covered tasks (a quick look); default all
     seed: int = 0
@@ -56,24 +56,20 @@ class SuitesOptions:
 def chosen(options: SuitesOptions) -> list[str]:
     """The suites named, `all` expanded to the world's covered ones; each checked (one line each)."""
     if options.suites == ["all"]:
-        try:
-            world = worlds.world(options.world)
-        except worlds.UnknownWorld as exc:
-            raise UserError(str(exc)) from None
-        if not world.suite:
-            raise UserError(f"world {world.name} has no LIBERO suite")
         names = []
-        for name in libero.suites(world.suite):
+        for name in libero.suites(world_suite(options.world)):
             try:
-                suite_of(CanonicalOptions(suite=name))
+                suites_of(CanonicalOptions(suite=name))
                 names.append(name)
             except UserError:  # a suite nothing of which we can do
                 continue
+        if not names:
+            raise UserError(f"no suite of world {options.world} has a task our skills and LIBERO's installed models can do")
         return names
     if not options.suites or len(set(options.suites)) != len(options.suites):
         raise UserError(f"suites must name suites once each (or be [all]), got {options.suites}")
     for name in options.suites:
-        suite_of(CanonicalOptions(suite=name))
+        suites_of(CanonicalOptions(suite=name))
     return list(options.suites)
 
 

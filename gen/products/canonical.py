@@ -60,7 +60,7 @@ ON_SCENE_MARGIN = 0.2  # m beyond a world's reach where LIBERO's regions may sti
 
 @dataclass
 class CanonicalOptions:
-    world: Optional[str] = None  # a LIBERO world (core/worlds/): its suite's tasks and initial states; default libero_object
+    world: Optional[str] = None  # a LIBERO world (core/worlds/), its suite's tasks, or libero_10 (all ten); default libero_object
     states: int = 50  # initial states per task (LIBERO has 50, some LIBERO-PRO suites 10); fewer are drawn with `seed`
     seed: int = 0
     image_size: int = 256  # the cameras' frames, pixels (the exam's policy side)
@@ -148,7 +148,24 @@ def _words(text: str) -> list[str]:
 
 
 def _libero_worlds() -> str:
-    return ", ".join(name for name in worlds.names() if worlds.world(name).suite)
+    """What `world=` takes here: each world that lays out a LIBERO suite, and each suite whose tasks
+    span several (libero_10)."""
+    spanning = [suite for suite, spanned in _base_suites().items() if len(spanned) > 1]
+    return ", ".join([*spanning, *(name for name in worlds.names() if worlds.world(name).suite)])
+
+
+def world_suite(name: str) -> str:
+    """The LIBERO suite a canonical exam's `world=` names: the world's own, or a suite whose tasks span
+    several worlds (libero_10); one line (UserError) for any other name."""
+    if len(_base_suites().get(name, [])) > 1:
+        return name
+    try:
+        suite = worlds.world(name).suite
+    except worlds.UnknownWorld:
+        raise UserError(f"unknown world {name!r}; canonical exams are LIBERO's: {_libero_worlds()}") from None
+    if not suite:
+        raise UserError(f"world {name} has no LIBERO suite; canonical exams are LIBERO's: {_libero_worlds()}")
+    return suite
 
 
 def _base_suites() -> dict[str, list[str]]:
@@ -249,12 +266,8 @@ def suite_of(options: CanonicalOptions) -> Suite:
     base = libero.base_suite(name)
     if options.suite and base not in _base_suites():
         raise UserError(f"unknown suite {name!r}; LIBERO's and LIBERO-PRO's suites with their files installed: {_all_suites()}")
-    try:
-        world = worlds.world(options.world or base)
-    except worlds.UnknownWorld as exc:
-        raise UserError(str(exc)) from None
-    if not world.suite:
-        raise UserError(f"world {world.name} has no LIBERO suite; canonical exams are LIBERO's: {_libero_worlds()}")
+    world_suite(options.world or base)
+    world = worlds.world(options.world or base)
     try:
         world.requires()
     except worlds.WorldUnavailable as exc:
@@ -274,6 +287,8 @@ def suite_of(options: CanonicalOptions) -> Suite:
             f"world {world.name} has no referent type that lays out LIBERO's tasks yet; canonical exams: {_canonical_worlds()}"
         )
     why = {task: _why_not(world, referent, name, task) for task in libero.tasks(name) if world.stands(task)}
+    if not why:
+        raise UserError(f"suite {name} sets none of its tasks in world {world.name}")
     covered = tuple(task for task, reason in why.items() if reason is None)
     if not covered:
         reasons = Counter(why.values()).most_common(1)[0][0]
@@ -303,7 +318,9 @@ def suites_of(options: CanonicalOptions) -> tuple[tuple[Suite, ...], dict[str, s
             name = options.suite or worlds.world(world).suite
             left |= {task: f"world {world}: {exc}" for task in libero.tasks(name) if worlds.world(world).stands(task)}
     if not found:
-        raise UserError(f"no world of {options.suite or options.world} lays out its tasks: {next(iter(left.values()))}")
+        tasks = libero.tasks(options.suite or libero.base_suite(options.world or ""))
+        why = next(iter(left.values()), f"none of its tasks is set in a scene of ours (its first: {tasks[0]})")
+        raise UserError(f"no world of {options.suite or options.world} lays out its tasks: {why}")
     return tuple(found), left
 
 

@@ -233,7 +233,7 @@ def test_the_multi_axis_experiment_refuses_bad_values_before_any_work(option: st
     ("option", "needle"),
     [
         ("world=native", "world native has no LIBERO suite"),
-        ("world=mars", "unknown world 'mars'"),
+        ("world=mars", "unknown world 'mars'; canonical exams are LIBERO's: libero_10, "),
         ("states=0", "states must be between 1 and 50"),
         ("image_size=7", "image_size must be an even number"),
     ],

@@ -458,6 +458,8 @@ def test_the_oracle_does_the_kitchens_tasks_of_libero_10s_canonical_exam(shared:
     [
         ("gen.canonical", ["world=libero_10_kitchen_scene9"], "unknown world 'libero_10_kitchen_scene9'"),
         ("gen", ["referent=libero_10", "world=libero_10_kitchen_scene3", "n=1"], "lays out only LIBERO's own tasks in world"),
+        ("gen.canonical", ["suite=libero_10_with_milk"], "none of its tasks is set in a scene of ours (its first: FLOOR_SCENE1"),
+        ("eval.suites", ["policy=nothing", "world=native"], "has no LIBERO suite; canonical exams are LIBERO's: libero_10,"),
     ],
 )
 def test_libero_10s_bad_input_is_refused_in_one_line(command: str, argv: list[str], needle: str, tmp_path: Path) -> None:
@@ -466,3 +468,15 @@ def test_libero_10s_bad_input_is_refused_in_one_line(command: str, argv: list[st
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and needle in lines[0], done.stderr
     assert not out.exists()
+
+
+def test_the_suites_of_libero_10_are_those_its_worlds_lay_out() -> None:
+    """`python -m eval.suites world=libero_10` (as `gen.canonical world=libero_10`) takes LIBERO-10's
+    suites across its worlds, and so does one of its worlds: the suites with a task set in a scene of
+    ours, not the added-object ones LIBERO-PRO sets on a floor of its own."""
+    from eval.suites import SuitesOptions, chosen
+
+    taken = chosen(SuitesOptions(policy="nothing", world="libero_10"))
+    assert taken[0] == "libero_10" and {"libero_10_lan", "libero_10_swap"} <= set(taken), taken
+    assert not any("_with_" in name for name in taken), taken
+    assert chosen(SuitesOptions(policy="nothing", world="libero_10_study")) == taken
