@@ -207,6 +207,11 @@ def test_one_policy_trains_on_several_datasets(object_dataset: Path, tmp_path: P
     assert len(union.starts) == len(one.starts) + len(other.starts) and union.ends[-1] == len(union)
     assert set(union.tasks) == set(one.tasks) | set(other.tasks)
     assert [union.tasks[t] for t in union.task[len(one) :]] == [other.tasks[t] for t in other.task]
+    for camera, images in union.images.items():  # each set's frames still memory-mapped, none copied
+        assert all(isinstance(part, np.memmap) for part in images.parts) and images.shape[0] == len(union)
+        picked = np.array([len(one) + 1, 0, len(union) - 1, 1])
+        seen = np.stack([other.images[camera][1], one.images[camera][0], other.images[camera][-1], one.images[camera][1]])
+        assert np.array_equal(images[picked], seen) and np.array_equal(images[len(one)], other.images[camera][0])
     both = np.concatenate([one.state, other.state])
     np.testing.assert_allclose(union.stats["observation.state"]["mean"], both.mean(0), rtol=1e-6)
     np.testing.assert_allclose(union.stats["observation.state"]["std"], both.std(0), rtol=1e-5, atol=1e-7)
