@@ -40,16 +40,23 @@ from eval.scoring.score import BASELINE_MEASURED, score
 from eval.sims.libero import versions
 from eval.sims.log import EXAM_KEY, POLICY_KEY, PREDICTION_KEY, SIM_KEY, VERSIONS_KEY, read_logs
 from eval.sims.rollout import OurSim, Runner, Simulator
+from jobs import faults
+from jobs.cli import Failed
 from jobs.partial import Partial
 from jobs.processes import die_with
 
 REPORT_FILES = (*REPORTS, ROLLOUTS)  # what a take writes to `out`, all it ever replaces there
+WATCH_S = 1.0  # seconds between looks at a take's worker processes
 
 
 def _worker(parent: int) -> None:
     """A rollout worker: Ctrl-C is for the parent to handle, and it dies with the parent (gen/products/workers.py)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with(parent)
+
+
+class WorkerDied(Failed):
+    """A rollout worker process died mid-take; the message says what is kept and how to go on."""
 
 
 class BaselineInterrupted(KeyboardInterrupt):
@@ -150,6 +157,7 @@ def run_chunk(policy_name: str, rows: pd.DataFrame, options: dict | None, partia
     runner = Runner(make(policy_name, **(options or {})), make_sim(sim, read(exam_root)))
     try:
         for _, row in rows.iterrows():
+            faults.point(f"rollout:{int(row['row'])}")
             partial.save(int(row["row"]), runner.run(row).to_row())
     finally:
         runner.close()
@@ -172,7 +180,20 @@ def _run(
         chunks = [rows.iloc[idx] for idx in np.array_split(np.arange(len(rows)), workers) if len(idx)]
         # Ctrl-C reaches the whole process group: the workers ignore it, this process stops the pool
         with multiprocessing.get_context("spawn").Pool(len(chunks), initializer=_worker, initargs=(os.getpid(),)) as pool:
-            pool.starmap(run_chunk, [(policy_name, c, policy_options, partial, sim, exam.root) for c in chunks])
+            # a worker that dies (a native crash, the OOM killer) is replaced by the pool but its chunk is
+            # lost, and the take would wait for it forever: watch the workers the chunks went to
+            workers_started = list(pool._pool)
+            taking = pool.starmap_async(run_chunk, [(policy_name, c, policy_options, partial, sim, exam.root) for c in chunks])
+            while not taking.ready():
+                taking.wait(WATCH_S)
+                dead = [w.exitcode for w in workers_started if w.exitcode is not None]
+                if dead and not taking.ready():
+                    how = signal.Signals(-dead[0]).name if dead[0] < 0 else f"exit code {dead[0]}"
+                    raise WorkerDied(
+                        f"a rollout worker died ({how}); the {len(partial.saved())} rollouts finished are kept in "
+                        f"{partial.root}: rerun with resume=true to continue"
+                    )
+            taking.get()
     else:
         runner = Runner(policy, make_sim(sim, exam))
         try:

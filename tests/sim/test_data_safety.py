@@ -72,9 +72,12 @@ def test_an_unusable_out_is_refused_before_the_policy_loads(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
 
 
+def _eval_argv(*args: str) -> list[str]:
+    return interruptible("eval", "policy=oracle", *args)
+
+
 def _eval_process(*args: str) -> subprocess.Popen[str]:
-    argv = interruptible("eval", "policy=oracle", *args)
-    return subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(_eval_argv(*args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 def test_ctrl_c_keeps_the_finished_rollouts_and_resume_gives_the_uninterrupted_report(exam: Path, tmp_path: Path) -> None:
@@ -105,6 +108,20 @@ def test_ctrl_c_keeps_the_finished_rollouts_and_resume_gives_the_uninterrupted_r
         assert (out / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oracle", "whole"], "the partial takes are cleaned up"
     assert sorted(os.listdir(out)) == sorted(os.listdir(tmp_path / "whole"))
+
+
+def test_a_worker_that_dies_mid_take_ends_it_in_one_line_and_resume_goes_on(exam: Path, tmp_path: Path) -> None:
+    """A rollout worker killed outright (a native crash, the OOM killer) used to leave the take waiting
+    forever for its chunk; now the take stops, says what it kept, and resume=true finishes it."""
+    out = tmp_path / "oracle"
+    env = {**os.environ, "DECONFOUND_CRASH_AT": "rollout:12"}  # in the second worker's chunk (rows 9-17)
+    dying = subprocess.Popen(_eval_argv(f"exam={exam}", f"out={out}", "workers=2"), stderr=subprocess.PIPE, text=True, env=env)
+    _, err = dying.communicate(timeout=300)
+    last = err.strip().splitlines()[-1]
+    assert dying.returncode == 1 and last.startswith("error: a rollout worker died (SIGKILL)") and "resume=true" in last, err
+    assert not out.exists() and 3 <= len(list((tmp_path / ".oracle.partial" / "rollouts").glob("*.pkl"))) < 18
+    resumed = subprocess.run(_eval_argv(f"exam={exam}", f"out={out}", "resume=true", "workers=2"), capture_output=True, text=True)
+    assert resumed.returncode == 0 and (out / "report.json").is_file(), resumed.stderr[-2000:]
 
 
 def test_ctrl_c_while_the_shortcut_baseline_is_measured_keeps_its_rollouts_too(exam: Path, tmp_path: Path) -> None:
