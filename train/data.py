@@ -52,7 +52,10 @@ class Joined:
 
     def __getitem__(self, index: int | np.ndarray) -> np.ndarray:
         """One frame (an integer), or the frames at an array of indices, in its order."""
-        wanted = np.asarray(index, np.int64) % self.shape[0]
+        wanted = np.asarray(index, np.int64)
+        if np.any((wanted < -self.shape[0]) | (wanted >= self.shape[0])):
+            raise IndexError(f"frame index out of range for {self.shape[0]} frames")
+        wanted = np.where(wanted < 0, wanted + self.shape[0], wanted)  # from the end, as an array's index is
         part = np.searchsorted(self.offsets, wanted, side="right") - 1
         if wanted.ndim == 0:
             return self.parts[int(part)][int(wanted - self.offsets[part])]
