@@ -348,6 +348,10 @@ def make_dataset(out: Path, *overrides: str) -> Path:
     """Generate a dataset through the real CLI config and pipeline, in this process unless `overrides`
     name workers: the test processes already keep every core busy, and a worker pool's start (imports,
     scenes compiled again) costs a small set more than its episodes (test_dataset: the same bytes)."""
+    # Before this process makes a GL context: triton, which a later training here loads (the text
+    # tower's transformers), crashes (SIGSEGV) after one (train/stages.py generate_once).
+    import torch._dynamo  # noqa: F401
+
     workers = () if any(o.startswith("workers=") for o in overrides) else ("workers=1",)
     generate(parse([f"out={out}", *workers, *overrides]), progress=False)
     return out
