@@ -56,6 +56,12 @@ class Program:
         return self.names == "place"
 
     @property
+    def carries(self) -> bool:
+        """The hand takes one thing and carries it to the target (a grocery to a plate): how far it got
+        is a stage of its own (the scorer's carry probe)."""
+        return self.brings and self.held
+
+    @property
     def lands(self) -> bool:
         """The hand lands on what the instruction names (so it could land on any other object instead)."""
         return self.names == "moved"

@@ -52,6 +52,11 @@ report.json schema (version 2):
   init_value = {faces: {face: rate}, trusted}: the same scoring on every rollout's initial
       state (a do-nothing policy); rates are trusted only when all are 0
   reach_probe.<face> = {reached_target, went_distractor, neither}: every failed rollout
+  carry_probe.<face> = {took_other, reached_none, not_lifted, lifted}: the failed task and swap
+      rollouts of a program that carries one thing to another (`put the bowl on the plate`), by
+      the stage they stopped at: the hand within 5 cm of another thing it could carry and never
+      of this one, of nothing, of this one that never rose 5 cm, or it rose and was not brought;
+      absent where no such program failed
   distances = {n, median_to_named, median_to_original, grazing (closest approach to either in
       (2, 5] cm), by_threshold: {"0.02": {obeyed_name, true_target}, "0.05": {...}},
       threshold_robust (the verdict against chance is the same at both thresholds),

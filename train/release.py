@@ -50,6 +50,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from core.exam import Exam, read
+from eval.scoring.score import CARRY_STAGES
 from gen.config import GenConfig
 from gen.planning import mix
 from jobs.cli import UserError, main
@@ -400,6 +401,7 @@ def collect(options: ReleaseOptions, carried: dict) -> dict:
                     "exam_digest": report.get("exam_digest"), "position": (report.get("baseline") or None),
                     "rollouts": report.get("rollouts"),
                     "reach_probe": report.get("reach_probe"), "per_object": report.get("per_object"),
+                    "carry_probe": report.get("carry_probe"),
                     "simulator_versions": report.get("simulator_versions"),
                 })  # fmt: skip
     for axis in AXES:
@@ -593,6 +595,21 @@ def _short_of(results: dict) -> list[str]:
         task, swap = (" / ".join(str(r["reach_probe"].get(f, {}).get(k, 0)) for k in where) for f in ("task", "obeyed_name"))
         obeyed = _face(r, "obeyed_name")
         lines.append(f"| {r['axis']} | {r['arm']} | {r['sim']} | {_face(r, 'task')} | {task} | {obeyed} | {swap} |")
+    carried = [r for r in probed if r.get("carry_probe")]
+    if carried:
+        lines += [
+            "",
+            "Where a program carries one thing to another (`put the bowl on the plate`), each failed rollout by the "
+            "stage it stopped at: the hand took another thing it could carry (the carried thing's name not read), "
+            "reached nothing, reached it and never lifted it (the grasp), or lifted it and did not bring it there.",
+            "",
+            "| axis | arm | sim | face | took another | reached nothing | not lifted | lifted, not brought |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for r in carried:
+            for face, stages in r["carry_probe"].items():
+                counts = " | ".join(str(stages[stage]) for stage in CARRY_STAGES)
+                lines.append(f"| {r['axis']} | {r['arm']} | {r['sim']} | {face} | {counts} |")
     for r in probed:
         if r["arm"] != "deconfounded" or not r.get("per_object") or r["faces"]["obeyed_name"]["rate"] >= 0.75:
             continue

@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 
 from core.products import REPORTS
 from core.rates import against_chance, widest_interval
+from eval.scoring.score import CARRY_STAGES
 
 FACE_ORDER = ("task", "obeyed_name", "true_target", "swap_success", "occ", "nonsense", "switch_obeyed", "switch_blind")
 
@@ -238,6 +239,15 @@ def markdown(report: dict) -> str:
     lines += [
         f"| {f} | {p['reached_target']} | {p['went_distractor']} | {p['neither']} |" for f, p in report["reach_probe"].items()
     ]
+    if report.get("carry_probe"):
+        lines += [
+            "",
+            "## Carry probe on failures (programs that bring one thing to another)",
+            "",
+            "| face | took another thing | reached nothing | reached it, not lifted | lifted, not brought |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [f"| {f} | {' | '.join(str(p[s]) for s in CARRY_STAGES)} |" for f, p in report["carry_probe"].items()]
     for title, key in (("Per slot (of the object asked for)", "per_slot"), ("Per object", "per_object")):
         lines += ["", f"## {title}", "", "| | task | obeyed name |", "|---|---|---|"]
         for value, r in report[key].items():

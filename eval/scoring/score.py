@@ -38,6 +38,8 @@ from eval.sims.log import SIM_SUCCESS, LogError
 LEVELS = {"5cm": LANDING, "2cm": min(REACH_THRESHOLDS), "achieved": None}
 HISTOGRAM_EDGES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, float("inf"))
 BASELINE_MEASURED = f"`{SHORTCUT}` on the same rows, in our simulator (python -m eval measures it once per exam and caches it)"
+CARRY_STAGES = ("took_other", "reached_none", "not_lifted", "lifted")  # carry_stage's verdicts, stage by stage
+LIFTED = programs.CARRY_LIFT / 2  # (m) raised this far above where it stood: the grasp held it
 PREDICTED_FACES = {"swap": "name", "task": "task", "occ": "occ"}  # faces whose first prediction is scored -> its key
 
 
@@ -297,6 +299,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
     parsed = parsed_logs(logs, exam)
     faces: dict[str, list[dict]] = defaultdict(list)  # per face: one entry per rollout it counts
     probe: dict[str, dict[str, int]] = defaultdict(lambda: {"reached_target": 0, "went_distractor": 0, "neither": 0})
+    carry: dict[str, dict[str, int]] = defaultdict(lambda: dict.fromkeys(CARRY_STAGES, 0))
     distances: list[tuple[float, float]] = []
     per_slot: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))  # (ok, trial)
     per_object: dict[str, dict[str, list[tuple[float, int]]]] = defaultdict(lambda: defaultdict(list))
@@ -364,6 +367,8 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             per_object[str(row["value"])][main].append((float(ok), trial))
         if not ok:
             probe[main][_probe(judged, asked)] += 1
+            if face in ("task", "swap") and (stage := carry_stage(spec, asked[1], ee, objects)) is not None:
+                carry[main][stage] += 1
     level_of = {t: level for level, t in LEVELS.items()}
     by_threshold = {
         t: {name: [e["levels"][level_of[t]] for e in faces.get(name, [])] for name in ("obeyed_name", "true_target")}
@@ -386,6 +391,7 @@ def score(exam: Exam, logs: pd.DataFrame, policy: str, exam_rollouts: int | None
             "trusted": all(not any(e["init"] for e in v) for v in faces.values()),
         },
         "reach_probe": dict(probe),
+        **({"carry_probe": dict(carry)} if carry else {}),
         "distances": _distances(
             distances,
             by_threshold,
@@ -480,6 +486,30 @@ def _probe(judged: dict, asked: tuple[str, str]) -> str:
         return "reached_target"
     closest = min(judged, key=lambda a: judged[a]["distance"])
     return "went_distractor" if judged[closest]["distance"] <= LANDING else "neither"
+
+
+def carry_stage(spec: EpisodeSpec, program: str, ee: np.ndarray, objects: dict[str, np.ndarray]) -> str | None:
+    """Where a failed rollout of a program that carries one thing to another (`put the bowl on the
+    plate`) stopped: `took_other`, the hand reached another thing it could carry, never this one (its
+    name not read); `reached_none`, it reached nothing it could carry; `not_lifted`, it reached this
+    one and never lifted it (the grasp); `lifted`, it lifted it and did not bring it where asked
+    (the carrying, or the place's name). None for a program that carries nothing to a place: the
+    reach probe (`_probe`) says where those went."""
+    if not programs.named(program).carries:
+        return None
+    carried = spec.task.params["object"]
+    reached = {
+        o.id
+        for o in spec.objects
+        if (kind := worlds.kind(o.kind, spec.setup.world)).graspable()
+        and not kind.is_site
+        and o.id in objects
+        and float(np.min(contact.grasp_distance(kind, objects[o.id], ee))) <= LANDING
+    }
+    if carried not in reached:
+        return "took_other" if reached else "reached_none"
+    height = objects[carried][:, 2]
+    return "lifted" if float(np.max(height) - height[0]) >= LIFTED else "not_lifted"
 
 
 def _distances(pairs: list[tuple[float, float]], by_threshold: dict, chance: float, trials: list[int]) -> dict:

@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from core import contact, worlds
+from core import contact, programs, worlds
 from core.exam import Exam, Switch, trial_rows
 from core.spec import EpisodeSpec
-from eval.scoring.score import score
+from eval.scoring.score import CARRY_STAGES, score
 from gen.planning.plan import default_setup, plan
 from referents import registry
 
@@ -111,3 +111,32 @@ def test_a_switch_row_counts_landings_from_its_switch_step() -> None:
     assert switch_obeyed(start, on_new, on_new) == (1, 0), "there from the switch on"
     assert switch_obeyed(on_old, on_old, on_new) == (1, 0), "over the original when told, then on to the new one"
     assert switch_obeyed(on_old, on_new, on_old) == (0, 1), "to the new one, then back to the original"
+
+
+@pytest.mark.parametrize("world", registry.worlds_of("goal"))
+def test_the_carry_probe_says_where_a_failed_carry_stopped(world: str) -> None:
+    """A failed `put X on Y` is told apart by how far it got: the hand at another thing it could
+    carry (X's name not read), at nothing, at X without lifting it (the grasp), or lifting X and
+    not bringing it (the place). Each task and swap row's hand does one of these in turn; the probe
+    counts each, per face."""
+    exam, _ = _exam("goal", world)
+    stages = CARRY_STAGES
+    logs, expected = _logs(exam, {}), {face: dict.fromkeys(stages, 0) for face in ("task", "obeyed_name")}
+    faces = {"task": "task", "swap": "obeyed_name"}
+    carries = [i for i, row in exam.trials.iterrows() if row["face"] in faces and programs.named(row["program"]).carries]
+    for n, i in enumerate(carries):
+        row, spec = exam.trials.loc[i], EpisodeSpec.from_json(exam.trials.at[i, "spec"])
+        carried = spec.task.params["object"]
+        others = [o for o in _graspable(spec) if worlds.kind(spec.object(o).kind, world).graspable()]
+        stage = stages[n % len(stages)] if others else stages[1 + n % (len(stages) - 1)]
+        objects = {k: np.array(v, float) for k, v in json.loads(logs.at[i, "objects"]).items()}
+        goes_to = {"took_other": others[0] if others else None, "reached_none": None}.get(stage, carried)
+        if stage == "lifted":
+            objects[carried][1, 2] += 0.1
+        if goes_to is not None:
+            kind = worlds.kind(spec.object(goes_to).kind, world)
+            logs.at[i, "ee"] = [logs.at[i, "ee"][0], contact.grasp_point(kind, objects[goes_to][1]).tolist()]
+        logs.at[i, "objects"] = json.dumps({k: v.tolist() for k, v in objects.items()})
+        expected[faces[row["face"]]][stage] += 1
+    report = score(exam, logs, "stages")
+    assert expected["task"] != dict.fromkeys(stages, 0) and report["carry_probe"] == expected
