@@ -274,10 +274,11 @@ def run(options: ReleaseOptions, carried: dict) -> None:
     for name, (line, cfg) in stages.items():
         kind, what = name.split()
         favouring = what == "deconfounded" and options.favour and not _trained(options, FAVOURED)
-        if kind == "data" and _trained(options, what) and not favouring:
-            continue  # trained on it already (here or restored): the dataset is needed again only to retrain
+        again = kind == "data" and _trained(options, what)  # trained on it already (here or restored)
+        if again and not favouring:
+            continue  # the dataset is needed again only to retrain
         commands.append(line)
-        generate_once(cfg, ledger, f"generate {name}")
+        generate_once(cfg, ledger, f"generate {name}" + (" again, for the favoured run" if again else ""))
         if kind == "exam":
             exams[what] = (read(str(cfg.out)), Path(str(cfg.out)))
     canonical = _canonical(options, ledger, commands) if options.canonical and "deconfounded" in options.arms else {}

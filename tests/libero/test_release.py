@@ -116,6 +116,8 @@ def test_the_favoured_cool_down_on_a_new_machine_branches_from_the_retrained_ste
     results = json.loads((docs / "results_libero_axes.json").read_text())
     assert results["training"]["favoured"]["branch"].endswith("deconfounded-stem/last.pt"), results["training"]
     assert results["training"]["favoured"]["steps"] == 6
+    regenerated = ("generate data deconfounded", "generate data deconfounded again, for the favoured run")
+    assert set(regenerated) <= set(results["timings_s"]), results["timings_s"]  # each machine's figure, named
     assert {r["axis"] for r in results["rows"] if r["arm"] == "favoured"} == {"relation", "color"}  # one set of weights
     evals = [c for c in results["commands"] if c.startswith("python -m eval policy=ckpt:") and "/favoured " in c]
     takes = [c.split(" exam=")[1].split()[0] for c in evals]
