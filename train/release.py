@@ -576,8 +576,9 @@ def _exams_taken(results: dict) -> list[str]:
 def _short_of(results: dict) -> list[str]:
     """Why an axis falls short, from its takes: where each failed rollout's hand went (the reach
     probe: at what was asked for but not done, the grasp or the placing; at another object, the
-    name not read; at neither, the reach itself), and the deconfounded arm's rates per asked-for
-    value on the axes below 75% obeyed."""
+    name not read; at neither, the reach itself), for a program that carries one thing to another
+    the stage its failures stopped at (the carry probe), and the deconfounded arm's rates per
+    asked-for value on the axes below 75% obeyed."""
     probed = [r for r in results["rows"] if r["exam"] == "axis" and r["arm"] != "confounded" and r.get("reach_probe")]
     if not probed:
         return []

@@ -120,7 +120,7 @@ def test_the_carry_probe_says_where_a_failed_carry_stopped(world: str) -> None:
     not bringing it (the place). Each task and swap row's hand does one of these in turn; the probe
     counts each, per face."""
     exam, _ = _exam("goal", world)
-    stages = CARRY_STAGES
+    stages = CARRY_STAGES  # took_other, reached_none, not_lifted, lifted: each row's hand does the next
     logs, expected = _logs(exam, {}), {face: dict.fromkeys(stages, 0) for face in ("task", "obeyed_name")}
     faces = {"task": "task", "swap": "obeyed_name"}
     carries = [i for i, row in exam.trials.iterrows() if row["face"] in faces and programs.named(row["program"]).carries]
