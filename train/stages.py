@@ -17,6 +17,7 @@ import hashlib
 import json
 import shlex
 import shutil
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager, nullcontext
@@ -36,6 +37,7 @@ if TYPE_CHECKING:
 
 WEIGHTS_DIGEST = "weights.sha256"  # beside a report: the weights (or, of a reference policy, the exam) it was taken with
 TIMINGS = "timings.json"  # in an experiment's `out`: each stage's wall time
+FLUSH_S = 60.0  # a running stage's time is added this often: a killed process loses at most this much
 
 
 class Ledger:
@@ -51,17 +53,37 @@ class Ledger:
 
     @contextmanager
     def timing(self, stage: str) -> Iterator[None]:
-        """Time the work inside as `stage`'s, added when it ends: also when stopped by Ctrl-C or an
-        error (a stage stopped part way did that much of its work, which its rerun does not redo)."""
-        start = time.perf_counter()
+        """Time the work inside as `stage`'s, added as it goes (every `FLUSH_S`) and when it ends: a
+        stage stopped part way, by Ctrl-C, an error or a killed process (a sitting's end), did that
+        much of its work, which its rerun does not redo."""
+        since, guard, done = time.perf_counter(), threading.Lock(), threading.Event()
+
+        def flush() -> None:
+            nonlocal since
+            with guard:
+                now = time.perf_counter()
+                self.add(stage, now - since)
+                since = now
+
+        def beat() -> None:
+            while not done.wait(FLUSH_S):
+                flush()
+
+        beating = threading.Thread(target=beat, name=f"ledger {stage}", daemon=True)
+        beating.start()
         try:
             yield
         finally:
-            self.spend(stage, start)
+            done.set()
+            beating.join()
+            flush()
 
     def spend(self, stage: str, start: float) -> None:
         """Add the work `stage` did since `start` (a `time.perf_counter()` reading) to the file as it is now."""
-        seconds = time.perf_counter() - start
+        self.add(stage, time.perf_counter() - start)
+
+    def add(self, stage: str, seconds: float) -> None:
+        """Add `seconds` of `stage`'s work to the file as it is now."""
         with held(self.path.with_name(f".{self.path.name}.lock")):
             self.spent = self._read()
             self.spent[stage] = round(self.spent.get(stage, 0.0) + seconds, 1)

@@ -260,6 +260,21 @@ def test_two_experiment_processes_add_to_one_ledger(tmp_path: Path) -> None:
     assert spent["generate c"] >= 0.2
 
 
+def test_a_killed_stage_keeps_the_time_it_worked(tmp_path: Path) -> None:
+    """A stage's process killed outright (a sitting's end: no `finally` runs) loses at most the last
+    `FLUSH_S` of its time: the ledger adds a running stage's time as it goes."""
+    code = (
+        "import sys, time; from pathlib import Path; from train import stages; stages.FLUSH_S = 0.1\n"
+        "with stages.Ledger(Path(sys.argv[1])).timing('take a'):\n    print('began', flush=True); time.sleep(60)"
+    )
+    worker = subprocess.Popen([sys.executable, "-c", code, str(tmp_path)], stdout=subprocess.PIPE, text=True)
+    assert worker.stdout is not None and worker.stdout.readline().strip() == "began"
+    time.sleep(1.5)
+    worker.kill()
+    worker.wait()
+    assert json.loads((tmp_path / TIMINGS).read_text())["take a"] >= 1.0
+
+
 def test_an_experiment_reuses_a_product_only_if_its_options_made_it(object_dataset: Path, shared: Shared) -> None:
     """A dataset or exam already in a stage's folder is reused only when made with the stage's
     options (not merely because something finished is there); another is refused, naming it."""
