@@ -522,6 +522,7 @@ def write_docs(results: dict, docs: Path) -> None:
             ]
     lines += _exams_taken(results)
     lines += _short_of(results)
+    lines += _fix_tried(results)
     if results["training"]:
         lines += ["", "## Training", ""]
         for arm, t in results["training"].items():
@@ -620,6 +621,36 @@ def _short_of(results: dict) -> list[str]:
         for value_, f in sorted(r["per_object"].items()):
             rates = (cell(f[face]) if face in f else "—" for face in ("task", "obeyed_name"))
             lines.append(f"| {value_} | {' | '.join(rates)} |")
+    return lines
+
+
+def _fix_tried(results: dict) -> list[str]:
+    """The favoured checkpoint beside the release, axis by axis, where both took the exam in one
+    simulator: what the fix bought on the favoured axes and what it cost the others (one set of
+    weights is judged on all seven)."""
+    pairs = [
+        (axis, sim, release, favoured)
+        for axis in AXES
+        for sim in SIMS
+        if (release := _find(results, axis, "deconfounded", sim)) and (favoured := _find(results, axis, FAVOURED, sim))
+    ]
+    if not pairs:
+        return []
+    favour = results["training"].get(FAVOURED, {}).get("favour", [])
+    lines = [
+        "",
+        "## The fix tried once, beside the release",
+        "",
+        f"The favoured checkpoint ({', '.join(favour) or 'no axis'} drawn more often in the cool-down) and the "
+        "release checkpoint, on the axis's held-out exam in the same simulator (one design: where they took "
+        "different generations of it, the table of generations above says so).",
+        "",
+        "| axis | sim | obeyed name: release | obeyed name: favoured | task: release | task: favoured |",
+        "|---|---|---|---|---|---|",
+    ]
+    for axis, sim, release, favoured in pairs:
+        cells = (_face(r, face) for face in ("obeyed_name", "task") for r in (release, favoured))
+        lines.append(f"| {axis}{' (favoured)' if axis in favour else ''} | {sim} | {' | '.join(cells)} |")
     return lines
 
 
