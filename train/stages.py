@@ -56,14 +56,13 @@ class Ledger:
         """Time the work inside as `stage`'s, added as it goes (every `FLUSH_S`) and when it ends: a
         stage stopped part way, by Ctrl-C, an error or a killed process (a sitting's end), did that
         much of its work, which its rerun does not redo."""
-        since, guard, done = time.perf_counter(), threading.Lock(), threading.Event()
+        since, done = time.perf_counter(), threading.Event()
 
-        def flush() -> None:
+        def flush() -> None:  # by the beat, then (once it has stopped) at the end: never both at once
             nonlocal since
-            with guard:
-                now = time.perf_counter()
-                self.add(stage, now - since)
-                since = now
+            now = time.perf_counter()
+            self.add(stage, now - since)
+            since = now
 
         def beat() -> None:
             while not done.wait(FLUSH_S):
@@ -77,10 +76,6 @@ class Ledger:
             done.set()
             beating.join()
             flush()
-
-    def spend(self, stage: str, start: float) -> None:
-        """Add the work `stage` did since `start` (a `time.perf_counter()` reading) to the file as it is now."""
-        self.add(stage, time.perf_counter() - start)
 
     def add(self, stage: str, seconds: float) -> None:
         """Add `seconds` of `stage`'s work to the file as it is now."""
